@@ -1,0 +1,84 @@
+//! Criterion benches, one group per stage, on a full 512 x 424 Kinect v2
+//! frame of a 16 degree ramp (the fixtures the unit tests use).
+
+use std::hint::black_box;
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use nalgebra::Vector3;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use slope_pipeline::cosine_kmeans::CosineKmeans;
+use slope_pipeline::cumulative_angle::cumulative_angle;
+use slope_pipeline::fixtures::{Scene, SceneCloud};
+use slope_pipeline::normals::NormalEstimator;
+use slope_pipeline::pass_through::PassThrough;
+use slope_pipeline::ransac_planes::PlaneSegmenter;
+use slope_pipeline::statistical_outlier::StatisticalOutlierFilter;
+use slope_pipeline::{Estimator, EstimatorConfig, SlopeMethod};
+
+fn frame() -> SceneCloud {
+    SceneCloud::kinect2(&Scene::ramp_between_walls(16.0), 1)
+}
+
+fn stages(c: &mut Criterion) {
+    let cloud = frame();
+    let view = cloud.view();
+    let config = EstimatorConfig::default();
+
+    let mut sor = StatisticalOutlierFilter::new();
+    let mut keep = Vec::new();
+    c.bench_function("statistical_outlier/full_frame", |b| {
+        b.iter(|| black_box(sor.filter(&view, &config.outlier, &mut keep)))
+    });
+    sor.filter(&view, &config.outlier, &mut keep);
+
+    let mut seg = PlaneSegmenter::new();
+    c.bench_function("ransac_planes/full_frame", |b| {
+        b.iter(|| {
+            let mut rng = ChaCha8Rng::seed_from_u64(0);
+            black_box(seg.segment(&view, &keep, &config.ransac, &mut rng).len())
+        })
+    });
+    let mut rng = ChaCha8Rng::seed_from_u64(0);
+    let planes = seg.segment(&view, &keep, &config.ransac, &mut rng).to_vec();
+    let largest = planes.iter().max_by_key(|p| p.inliers.len()).map(|p| p.inliers.clone()).unwrap_or_default();
+
+    let mut pt = PassThrough::new();
+    c.bench_function("pass_through/largest_plane", |b| {
+        b.iter(|| black_box(pt.filter(view.points, &largest, config.pass_through.max_points).0.len()))
+    });
+    let members = pt.filter(view.points, &largest, config.pass_through.max_points).0.to_vec();
+
+    let mut ne = NormalEstimator::new();
+    c.bench_function("normals/10k_points_k100", |b| {
+        b.iter(|| black_box(ne.estimate(&view, &members, &config.normals, &Vector3::zeros()).1))
+    });
+    let normals = ne.estimate(&view, &members, &config.normals, &Vector3::zeros()).0.to_vec();
+
+    let mut km = CosineKmeans::new();
+    c.bench_function("cosine_kmeans/10k_normals", |b| {
+        b.iter(|| black_box(km.cluster(&normals, config.kmeans.clusters, config.kmeans.max_iterations)))
+    });
+
+    let ground = vec![Vector3::new(0.0, -0.94, -0.34); 1000];
+    c.bench_function("cumulative_angle/100_draws", |b| {
+        b.iter(|| {
+            let mut rng = ChaCha8Rng::seed_from_u64(0);
+            black_box(cumulative_angle(&normals, &ground, 100, &mut rng))
+        })
+    });
+
+    for method in SlopeMethod::ALL {
+        let mut est = Estimator::new(EstimatorConfig { method, ..EstimatorConfig::default() });
+        c.bench_function(&format!("estimator/{}", method.name()), |b| {
+            b.iter(|| black_box(est.estimate(&view).slope_deg))
+        });
+    }
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default().sample_size(20);
+    targets = stages
+}
+criterion_main!(benches);

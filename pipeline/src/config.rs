@@ -1,0 +1,447 @@
+//! [`EstimatorConfig`]: every parameter of the pipeline, with the paper's
+//! values as defaults, read from TOML.
+//!
+//! ```toml
+//! method = "paper"          # "paper" | "least-squares" | "tls"
+//! seed = 0                  # seed of every random draw (RANSAC, averaging)
+//!
+//! [outlier]                 # statistical outlier removal (paper 2.1)
+//! neighbours = 20           # m
+//! std_ratio = 2.0           # alpha
+//!
+//! [ransac]                  # plane segmentation (paper 2.2, 3)
+//! distance_threshold_m = 0.02
+//!
+//! [pass_through]            # paper 3.1
+//! max_points = 10000
+//!
+//! [normals]                 # paper 2.3
+//! neighbours = 100          # K
+//!
+//! [kmeans]                  # paper 3.1
+//! clusters = 2
+//!
+//! [cumulative]              # paper 3.2
+//! draws = 100
+//! ```
+//!
+//! Every section and key is optional; `deny_unknown_fields` turns a typo into
+//! an error that names the key.
+
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+use slope_ipc_types::SlopeMethod;
+
+/// The method named on command lines and in config files:
+/// `"paper" | "least-squares" | "tls"`.
+pub fn parse_method(name: &str) -> Option<SlopeMethod> {
+    SlopeMethod::ALL.into_iter().find(|m| m.name() == name)
+}
+
+/// Why a configuration was rejected.
+#[derive(Debug, thiserror::Error)]
+pub enum ConfigError {
+    #[error("estimator config is not valid TOML or has an unknown key: {0}")]
+    Parse(#[from] toml::de::Error),
+    #[error("estimator config key `{key}` = {value}: {reason}")]
+    Invalid {
+        key: &'static str,
+        value: String,
+        reason: &'static str,
+    },
+}
+
+/// All parameters of the estimator. `Default` holds the paper's values where
+/// the paper gives one and documented choices elsewhere (pipeline README).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct EstimatorConfig {
+    /// Which fit turns the two planes into a slope.
+    #[serde(
+        serialize_with = "serialize_method",
+        deserialize_with = "deserialize_method"
+    )]
+    pub method: SlopeMethod,
+    /// Seed of every random draw; the same frame and config give the same
+    /// estimate.
+    pub seed: u64,
+    pub outlier: OutlierConfig,
+    pub ransac: RansacConfig,
+    pub pass_through: PassThroughConfig,
+    pub normals: NormalsConfig,
+    pub kmeans: KmeansConfig,
+    pub cumulative: CumulativeConfig,
+    pub selection: SelectionConfig,
+}
+
+impl Default for EstimatorConfig {
+    fn default() -> Self {
+        Self {
+            method: SlopeMethod::Paper,
+            seed: 0,
+            outlier: OutlierConfig::default(),
+            ransac: RansacConfig::default(),
+            pass_through: PassThroughConfig::default(),
+            normals: NormalsConfig::default(),
+            kmeans: KmeansConfig::default(),
+            cumulative: CumulativeConfig::default(),
+            selection: SelectionConfig::default(),
+        }
+    }
+}
+
+/// Statistical outlier removal (`statistical_outlier.rs`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct OutlierConfig {
+    pub enabled: bool,
+    /// m: neighbours whose mean distance is the point's statistic (paper: 20).
+    pub neighbours: usize,
+    /// alpha: drop points beyond mean + alpha * std (paper: 2).
+    pub std_ratio: f64,
+}
+
+impl Default for OutlierConfig {
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            neighbours: 20,
+            std_ratio: 2.0,
+        }
+    }
+}
+
+/// RANSAC plane segmentation (`ransac_planes.rs`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RansacConfig {
+    /// A point within this distance of a plane is an inlier, metres.
+    pub distance_threshold_m: f64,
+    /// Hypotheses drawn per plane at most (fewer when `confidence` is reached).
+    pub max_iterations: usize,
+    /// Probability of drawing at least one all-inlier sample, which sets the
+    /// adaptive iteration count.
+    pub confidence: f64,
+    /// Hypotheses are drawn and scored on every `sample_stride_px`-th pixel in
+    /// both directions; the chosen plane then takes its inliers from every
+    /// pixel.
+    pub sample_stride_px: usize,
+    /// A sample point whose local normal is further than this from the
+    /// hypothesis' normal is not its inlier, degrees; 0 or >= 90 disables.
+    pub normal_threshold_deg: f64,
+    /// Stop when the last plane had fewer inliers than this.
+    pub min_plane_points: usize,
+    /// Stop when fewer than this fraction of the filtered points is left.
+    pub min_remaining_fraction: f64,
+    /// Stop after this many planes.
+    pub max_planes: usize,
+}
+
+impl Default for RansacConfig {
+    fn default() -> Self {
+        Self {
+            distance_threshold_m: 0.02,
+            max_iterations: 500,
+            confidence: 0.999,
+            sample_stride_px: 4,
+            normal_threshold_deg: 30.0,
+            min_plane_points: 800,
+            min_remaining_fraction: 0.03,
+            max_planes: 10,
+        }
+    }
+}
+
+/// Pass-through filter (`pass_through.rs`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PassThroughConfig {
+    /// A plane with more points is cut down to at most this many (paper: 10,000).
+    pub max_points: usize,
+}
+
+impl Default for PassThroughConfig {
+    fn default() -> Self {
+        Self { max_points: 10_000 }
+    }
+}
+
+/// Normal estimation (`normals.rs`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct NormalsConfig {
+    /// K: neighbours of the local plane fit (paper: 100).
+    pub neighbours: usize,
+    /// Largest pixel window radius tried before the k-d tree takes over.
+    pub max_window_radius_px: usize,
+}
+
+impl Default for NormalsConfig {
+    fn default() -> Self {
+        Self {
+            neighbours: 100,
+            max_window_radius_px: 12,
+        }
+    }
+}
+
+/// Cosine k-means (`cosine_kmeans.rs`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct KmeansConfig {
+    /// Clusters per plane; the largest is kept.
+    pub clusters: usize,
+    pub max_iterations: usize,
+}
+
+impl Default for KmeansConfig {
+    fn default() -> Self {
+        Self {
+            clusters: 2,
+            max_iterations: 50,
+        }
+    }
+}
+
+/// Cumulative averaging (`cumulative_angle.rs`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct CumulativeConfig {
+    /// Random normal pairs averaged (paper: 100).
+    pub draws: usize,
+}
+
+impl Default for CumulativeConfig {
+    fn default() -> Self {
+        Self { draws: 100 }
+    }
+}
+
+/// Which plane is the ground and which the inclined plane
+/// (`plane_selection.rs`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SelectionConfig {
+    /// With a mount: a ground candidate's normal is within this of the
+    /// mount's up vector, degrees.
+    pub ground_max_tilt_deg: f64,
+    /// Without a mount: a ground candidate's normal is within this of the
+    /// camera's up (-y), degrees.
+    pub unmounted_ground_max_tilt_deg: f64,
+    /// Planes whose normals are within this of each other count as parallel
+    /// (treads, floor, table tops), degrees.
+    pub parallel_tolerance_deg: f64,
+    /// An inclined plane differs from the ground by at least this, degrees.
+    pub min_slope_deg: f64,
+    /// An inclined plane's horizontal normal is within this of the forward
+    /// axis (a ramp ahead or a wall faced), not beside the robot, degrees.
+    pub max_heading_deg: f64,
+    /// Among inclined candidates the nearest is taken unless it has fewer than
+    /// this fraction of the best-supported candidate's inliers.
+    pub min_relative_support: f64,
+}
+
+impl Default for SelectionConfig {
+    fn default() -> Self {
+        Self {
+            ground_max_tilt_deg: 15.0,
+            unmounted_ground_max_tilt_deg: 50.0,
+            parallel_tolerance_deg: 4.0,
+            min_slope_deg: 2.0,
+            max_heading_deg: 50.0,
+            min_relative_support: 0.25,
+        }
+    }
+}
+
+impl EstimatorConfig {
+    /// Parses a TOML document; missing keys keep their defaults. The result
+    /// is validated.
+    pub fn from_toml_str(text: &str) -> Result<Self, ConfigError> {
+        let config: Self = toml::from_str(text)?;
+        config.validate()?;
+        Ok(config)
+    }
+
+    /// Checks every value's range; the error names the first bad key.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        fn positive(key: &'static str, v: f64) -> Result<(), ConfigError> {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(invalid(key, v, "must be a finite number > 0"))
+            }
+        }
+        fn angle(key: &'static str, v: f64) -> Result<(), ConfigError> {
+            if v.is_finite() && (0.0..=180.0).contains(&v) {
+                Ok(())
+            } else {
+                Err(invalid(key, v, "must be an angle in 0..=180 degrees"))
+            }
+        }
+        fn at_least(key: &'static str, v: usize, min: usize) -> Result<(), ConfigError> {
+            if v >= min {
+                Ok(())
+            } else {
+                Err(invalid(
+                    key,
+                    v,
+                    if min == 1 {
+                        "must be at least 1"
+                    } else {
+                        "is too small"
+                    },
+                ))
+            }
+        }
+        fn fraction(key: &'static str, v: f64) -> Result<(), ConfigError> {
+            if v.is_finite() && (0.0..=1.0).contains(&v) {
+                Ok(())
+            } else {
+                Err(invalid(key, v, "must be in 0..=1"))
+            }
+        }
+        at_least("outlier.neighbours", self.outlier.neighbours, 1)?;
+        if self.outlier.neighbours > crate::statistical_outlier::MAX_NEIGHBOURS {
+            return Err(invalid(
+                "outlier.neighbours",
+                self.outlier.neighbours,
+                "must be at most 48 (the 7x7 pixel window)",
+            ));
+        }
+        if !(self.outlier.std_ratio.is_finite() && self.outlier.std_ratio >= 0.0) {
+            return Err(invalid(
+                "outlier.std_ratio",
+                self.outlier.std_ratio,
+                "must be a finite number >= 0",
+            ));
+        }
+        positive(
+            "ransac.distance_threshold_m",
+            self.ransac.distance_threshold_m,
+        )?;
+        at_least("ransac.max_iterations", self.ransac.max_iterations, 1)?;
+        if !(self.ransac.confidence > 0.0 && self.ransac.confidence < 1.0) {
+            return Err(invalid(
+                "ransac.confidence",
+                self.ransac.confidence,
+                "must be in the open interval (0, 1)",
+            ));
+        }
+        at_least("ransac.sample_stride_px", self.ransac.sample_stride_px, 1)?;
+        angle(
+            "ransac.normal_threshold_deg",
+            self.ransac.normal_threshold_deg,
+        )?;
+        at_least("ransac.min_plane_points", self.ransac.min_plane_points, 3)?;
+        fraction(
+            "ransac.min_remaining_fraction",
+            self.ransac.min_remaining_fraction,
+        )?;
+        at_least("ransac.max_planes", self.ransac.max_planes, 1)?;
+        at_least("pass_through.max_points", self.pass_through.max_points, 3)?;
+        at_least("normals.neighbours", self.normals.neighbours, 3)?;
+        at_least(
+            "normals.max_window_radius_px",
+            self.normals.max_window_radius_px,
+            1,
+        )?;
+        at_least("kmeans.clusters", self.kmeans.clusters, 1)?;
+        at_least("kmeans.max_iterations", self.kmeans.max_iterations, 1)?;
+        at_least("cumulative.draws", self.cumulative.draws, 1)?;
+        let s = &self.selection;
+        angle("selection.ground_max_tilt_deg", s.ground_max_tilt_deg)?;
+        angle(
+            "selection.unmounted_ground_max_tilt_deg",
+            s.unmounted_ground_max_tilt_deg,
+        )?;
+        angle("selection.parallel_tolerance_deg", s.parallel_tolerance_deg)?;
+        angle("selection.min_slope_deg", s.min_slope_deg)?;
+        angle("selection.max_heading_deg", s.max_heading_deg)?;
+        fraction("selection.min_relative_support", s.min_relative_support)?;
+        Ok(())
+    }
+}
+
+fn invalid(key: &'static str, value: impl ToString, reason: &'static str) -> ConfigError {
+    ConfigError::Invalid {
+        key,
+        value: value.to_string(),
+        reason,
+    }
+}
+
+fn serialize_method<S: Serializer>(method: &SlopeMethod, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_str(method.name())
+}
+
+fn deserialize_method<'de, D: Deserializer<'de>>(d: D) -> Result<SlopeMethod, D::Error> {
+    let name = String::deserialize(d)?;
+    parse_method(&name).ok_or_else(|| {
+        serde::de::Error::custom(format!(
+            "unknown method \"{name}\": expected \"paper\", \"least-squares\" or \"tls\""
+        ))
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_the_papers() {
+        let c = EstimatorConfig::default();
+        assert_eq!(c.method, SlopeMethod::Paper);
+        assert_eq!(c.outlier.neighbours, 20);
+        assert_eq!(c.outlier.std_ratio, 2.0);
+        assert_eq!(c.pass_through.max_points, 10_000);
+        assert_eq!(c.normals.neighbours, 100);
+        assert_eq!(c.cumulative.draws, 100);
+        c.validate().unwrap();
+    }
+
+    #[test]
+    fn toml_overrides_and_keeps_defaults() {
+        let c = EstimatorConfig::from_toml_str(
+            "method = \"least-squares\"\nseed = 7\n[ransac]\ndistance_threshold_m = 0.01\n",
+        )
+        .unwrap();
+        assert_eq!(c.method, SlopeMethod::LeastSquares);
+        assert_eq!(c.seed, 7);
+        assert_eq!(c.ransac.distance_threshold_m, 0.01);
+        assert_eq!(c.ransac.max_iterations, RansacConfig::default().max_iterations);
+        assert_eq!(c.normals, NormalsConfig::default());
+        assert_eq!(
+            EstimatorConfig::from_toml_str("").unwrap(),
+            EstimatorConfig::default()
+        );
+    }
+
+    #[test]
+    fn round_trips_through_toml() {
+        let mut c = EstimatorConfig::default();
+        c.method = SlopeMethod::Tls;
+        c.kmeans.clusters = 3;
+        let text = toml::to_string(&c).unwrap();
+        assert_eq!(EstimatorConfig::from_toml_str(&text).unwrap(), c);
+    }
+
+    #[test]
+    fn unknown_keys_and_methods_are_errors() {
+        let e = EstimatorConfig::from_toml_str("[ransac]\ndistance = 0.01\n").unwrap_err();
+        assert!(e.to_string().contains("distance"), "{e}");
+        let e = EstimatorConfig::from_toml_str("method = \"magic\"\n").unwrap_err();
+        assert!(e.to_string().contains("magic"), "{e}");
+        let e = EstimatorConfig::from_toml_str("[cumulative]\ndraws = 0\n").unwrap_err();
+        assert!(e.to_string().contains("cumulative.draws"), "{e}");
+        let e = EstimatorConfig::from_toml_str("[ransac]\nconfidence = 1.0\n").unwrap_err();
+        assert!(e.to_string().contains("ransac.confidence"), "{e}");
+    }
+
+    #[test]
+    fn method_names() {
+        assert_eq!(parse_method("paper"), Some(SlopeMethod::Paper));
+        assert_eq!(parse_method("least-squares"), Some(SlopeMethod::LeastSquares));
+        assert_eq!(parse_method("tls"), Some(SlopeMethod::Tls));
+        assert_eq!(parse_method("TLS"), None);
+    }
+}

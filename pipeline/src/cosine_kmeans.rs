@@ -1,0 +1,207 @@
+//! Stage 5, cosine k-means (paper 3.1): the normals of one plane are
+//! clustered with the cosine distance `1 - cos(a, b)`; the initial centres
+//! are picked one after another as far apart as possible (the first is the
+//! normal nearest the mean direction, each next one maximises its cosine
+//! distance to the nearest centre chosen so far); the dominant (largest)
+//! cluster is kept and the rest dropped as outliers.
+
+use nalgebra::Vector3;
+
+/// The outcome of one clustering.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Clustering {
+    /// Unit centre of each cluster.
+    pub centres: Vec<Vector3<f64>>,
+    /// Members of each cluster.
+    pub counts: Vec<usize>,
+    /// Index of the largest cluster.
+    pub dominant: usize,
+    /// Lloyd iterations run.
+    pub iterations: usize,
+}
+
+/// Reusable buffers of the clustering.
+#[derive(Debug, Default, Clone)]
+pub struct CosineKmeans {
+    unit: Vec<Vector3<f64>>,
+    labels: Vec<usize>,
+    sums: Vec<Vector3<f64>>,
+}
+
+/// Cosine distance of two unit vectors.
+#[inline]
+pub fn cosine_distance(a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
+    1.0 - a.dot(b)
+}
+
+impl CosineKmeans {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Clusters the finite, non-zero vectors of `normals` (others are
+    /// ignored) into at most `k` clusters. `None` when none is usable.
+    pub fn cluster(&mut self, normals: &[Vector3<f64>], k: usize, max_iterations: usize) -> Option<Clustering> {
+        self.unit.clear();
+        self.unit.extend(
+            normals
+                .iter()
+                .filter(|n| n.iter().all(|c| c.is_finite()))
+                .filter_map(|n| n.try_normalize(1e-12)),
+        );
+        let n = self.unit.len();
+        if n == 0 {
+            return None;
+        }
+        let k = k.clamp(1, n);
+        // Farthest-first initial centres.
+        let mean = self.unit.iter().sum::<Vector3<f64>>();
+        let first = match mean.try_normalize(1e-12) {
+            Some(m) => self.argmin_distance(&m),
+            None => 0,
+        };
+        let mut centres = vec![self.unit[first]];
+        let mut nearest: Vec<f64> = self.unit.iter().map(|u| cosine_distance(u, &centres[0])).collect();
+        while centres.len() < k {
+            let (far, &d) = nearest
+                .iter()
+                .enumerate()
+                .max_by(|a, b| a.1.total_cmp(b.1))?;
+            if d <= 0.0 {
+                break; // every vector coincides with a centre
+            }
+            let c = self.unit[far];
+            for (nd, u) in nearest.iter_mut().zip(&self.unit) {
+                *nd = nd.min(cosine_distance(u, &c));
+            }
+            centres.push(c);
+        }
+        let k = centres.len();
+        self.labels.clear();
+        self.labels.resize(n, usize::MAX);
+        let mut iterations = 0;
+        let mut counts = vec![0usize; k];
+        for _ in 0..max_iterations.max(1) {
+            iterations += 1;
+            let mut changed = false;
+            for (label, u) in self.labels.iter_mut().zip(&self.unit) {
+                let best = centres
+                    .iter()
+                    .enumerate()
+                    .map(|(j, c)| (j, cosine_distance(u, c)))
+                    .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))
+                    .map_or(0, |(j, _)| j);
+                if *label != best {
+                    *label = best;
+                    changed = true;
+                }
+            }
+            self.sums.clear();
+            self.sums.resize(k, Vector3::zeros());
+            counts.iter_mut().for_each(|c| *c = 0);
+            for (&label, u) in self.labels.iter().zip(&self.unit) {
+                self.sums[label] += u;
+                counts[label] += 1;
+            }
+            for (c, s) in centres.iter_mut().zip(&self.sums) {
+                if let Some(m) = s.try_normalize(1e-12) {
+                    *c = m;
+                }
+            }
+            if !changed {
+                break;
+            }
+        }
+        let dominant = counts
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(&a.0)))
+            .map_or(0, |(j, _)| j);
+        Some(Clustering {
+            centres,
+            counts,
+            dominant,
+            iterations,
+        })
+    }
+
+    /// The unit vectors of cluster `cluster` from the last call.
+    pub fn members(&self, cluster: usize) -> impl Iterator<Item = &Vector3<f64>> + '_ {
+        self.unit
+            .iter()
+            .zip(&self.labels)
+            .filter(move |(_, &l)| l == cluster)
+            .map(|(u, _)| u)
+    }
+
+    fn argmin_distance(&self, target: &Vector3<f64>) -> usize {
+        self.unit
+            .iter()
+            .enumerate()
+            .min_by(|a, b| cosine_distance(a.1, target).total_cmp(&cosine_distance(b.1, target)))
+            .map_or(0, |(j, _)| j)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cloud::angle_between_deg;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    fn jitter(rng: &mut ChaCha8Rng, n: Vector3<f64>, deg: f64) -> Vector3<f64> {
+        let s = deg.to_radians();
+        (n + Vector3::new(
+            rng.random_range(-s..s),
+            rng.random_range(-s..s),
+            rng.random_range(-s..s),
+        ))
+        .normalize()
+    }
+
+    #[test]
+    fn two_well_separated_clusters_are_found() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let a = Vector3::new(0.0, -1.0, -0.3).normalize();
+        let b = Vector3::new(0.0, -0.2, -1.0).normalize();
+        let mut normals: Vec<Vector3<f64>> = (0..700).map(|_| jitter(&mut rng, a, 2.0)).collect();
+        normals.extend((0..300).map(|_| jitter(&mut rng, b, 2.0)));
+        normals.push(Vector3::repeat(f64::NAN));
+        let mut km = CosineKmeans::new();
+        let c = km.cluster(&normals, 2, 50).unwrap();
+        assert_eq!(c.centres.len(), 2);
+        let mut counts = c.counts.clone();
+        counts.sort_unstable();
+        assert_eq!(counts, vec![300, 700]);
+        assert!(angle_between_deg(&c.centres[c.dominant], &a) < 0.5);
+        // Every dominant member is one of the 700 around a.
+        assert!(km.members(c.dominant).all(|m| angle_between_deg(m, &a) < 5.0));
+        assert_eq!(km.members(c.dominant).count(), 700);
+    }
+
+    #[test]
+    fn farthest_first_puts_an_outlier_in_its_own_cluster() {
+        let mut rng = ChaCha8Rng::seed_from_u64(4);
+        let a = Vector3::new(0.3, -0.9, -0.2).normalize();
+        let mut normals: Vec<Vector3<f64>> = (0..500).map(|_| jitter(&mut rng, a, 1.0)).collect();
+        let outliers = [Vector3::new(1.0, 0.0, 0.0), Vector3::new(0.9, 0.1, 0.1).normalize()];
+        normals.extend(outliers);
+        let mut km = CosineKmeans::new();
+        let c = km.cluster(&normals, 2, 50).unwrap();
+        assert_eq!(c.counts[c.dominant], 500);
+        assert!(km.members(c.dominant).all(|m| angle_between_deg(m, &a) < 3.0));
+    }
+
+    #[test]
+    fn degenerate_inputs() {
+        let mut km = CosineKmeans::new();
+        assert!(km.cluster(&[], 2, 10).is_none());
+        assert!(km.cluster(&[Vector3::zeros()], 2, 10).is_none());
+        let same = vec![Vector3::z(); 10];
+        let c = km.cluster(&same, 3, 10).unwrap();
+        assert_eq!(c.centres.len(), 1);
+        assert_eq!(c.counts, vec![10]);
+        assert!((cosine_distance(&Vector3::x(), &Vector3::y()) - 1.0).abs() < 1e-15);
+    }
+}

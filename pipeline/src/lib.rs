@@ -1,0 +1,40 @@
+//! The slope estimator: the method of "Application-Oriented Fusion Estimation
+//! Method for Road Slope Using RGB-D Robots" on organised Kinect clouds, and
+//! the least-squares and TLS baselines it is compared with.
+//!
+//! One stage per file, each a pure function or a small struct that reuses
+//! its buffers (see the crate README for every shortcut against the paper):
+//!
+//! | file | stage |
+//! |---|---|
+//! | `statistical_outlier.rs` | 1. statistical outlier removal (m = 20, alpha = 2) |
+//! | `ransac_planes.rs` | 2. RANSAC plane segmentation |
+//! | `pass_through.rs` | 3. pass-through filter (at most 10,000 points a plane) |
+//! | `normals.rs` | 4. PCA normals over K = 100 neighbours |
+//! | `cosine_kmeans.rs` | 5. cosine k-means, dominant cluster |
+//! | `cumulative_angle.rs` | 6. cumulative averaging of the angle |
+//! | `plane_fit.rs` | TLS and least-squares plane fits (baselines) |
+//! | `plane_selection.rs` | which plane is the ground, which the inclined plane; sign, distance |
+//! | `estimator.rs` | orchestration and timings |
+
+pub mod cloud;
+pub mod config;
+pub mod cosine_kmeans;
+pub mod cumulative_angle;
+pub mod estimator;
+#[doc(hidden)]
+pub mod fixtures;
+pub mod normals;
+pub mod pass_through;
+pub mod plane_fit;
+pub mod plane_selection;
+pub mod ransac_planes;
+pub mod statistical_outlier;
+
+pub use cloud::CloudView;
+pub use config::{
+    parse_method, ConfigError, CumulativeConfig, EstimatorConfig, KmeansConfig, NormalsConfig, OutlierConfig,
+    PassThroughConfig, RansacConfig, SelectionConfig,
+};
+pub use estimator::{Estimate, Estimator, PlaneEstimate, StageTimings};
+pub use slope_ipc_types::{EstimateStatus, SlopeMethod};

@@ -1,0 +1,462 @@
+//! The iceoryx2 ports every slope process uses, configured in one place so
+//! that whichever process comes first creates each service with the same
+//! settings.
+//!
+//! Each topic is a publish-subscribe service plus an event service of the
+//! same name; publishers notify after every send so subscribers can sleep in
+//! a `WaitSet` instead of polling. Subscriber queues overflow safely (the
+//! oldest sample is replaced): a slow subscriber never blocks a publisher.
+
+use core::time::Duration;
+use std::fmt::Debug;
+
+use iceoryx2::port::listener::Listener;
+use iceoryx2::port::notifier::Notifier;
+use iceoryx2::port::publisher::Publisher;
+use iceoryx2::port::subscriber::Subscriber;
+use iceoryx2::prelude::*;
+use iceoryx2::sample::Sample;
+use iceoryx2::service::port_factory::event::PortFactory as EventFactory;
+use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFactory;
+use slope_ipc_types::{now_ns, CloudHeader, CloudPoint, ServiceNames, SlopeEstimate};
+
+use crate::projection::Projector;
+use crate::source::{SourceFrame, SourceInfo};
+
+/// Most processes that may subscribe to clouds at once (estimator,
+/// recorder, viewers).
+pub const CLOUD_MAX_SUBSCRIBERS: usize = 6;
+/// Clouds a subscriber may hold unread. Two: the one being processed may
+/// be superseded by at most one newer one; older ones are stale anyway.
+pub const CLOUD_SUBSCRIBER_BUFFER: usize = 2;
+/// Most processes that may subscribe to estimates at once.
+pub const ESTIMATE_MAX_SUBSCRIBERS: usize = 16;
+/// Estimates a subscriber may hold unread (about 2 s at 30 Hz).
+pub const ESTIMATE_SUBSCRIBER_BUFFER: usize = 64;
+
+/// An iceoryx2 operation that failed, with the service it concerned.
+#[derive(Debug, thiserror::Error)]
+#[error("failed to {action} on service '{service}': {detail}")]
+pub struct IpcError {
+    pub action: &'static str,
+    pub service: String,
+    pub detail: String,
+}
+
+impl IpcError {
+    fn new(action: &'static str, service: &str, detail: impl Debug) -> Self {
+        Self {
+            action,
+            service: service.to_string(),
+            detail: format!("{detail:?}"),
+        }
+    }
+}
+
+/// A cloud frame with more points than the configured maximum, or whose
+/// size does not match the publisher's source.
+#[derive(Debug, thiserror::Error)]
+pub enum PublishFrameError {
+    #[error(transparent)]
+    Ipc(#[from] IpcError),
+    #[error(
+        "frame {index} is {width} x {height} but the source announced {expected_width} x {expected_height}"
+    )]
+    SizeMismatch {
+        index: u64,
+        width: u32,
+        height: u32,
+        expected_width: u32,
+        expected_height: u32,
+    },
+}
+
+/// Creates the process's iceoryx2 node. Signal handling is left to the
+/// binaries (ctrlc), so iceoryx2 installs no handlers of its own.
+pub fn create_node(name: &str) -> Result<Node<ipc::Service>, IpcError> {
+    let node_name =
+        NodeName::new(name).map_err(|e| IpcError::new("name the node", name, e))?;
+    let node = NodeBuilder::new()
+        .name(&node_name)
+        .signal_handling_mode(SignalHandlingMode::Disabled)
+        .create::<ipc::Service>()
+        .map_err(|e| IpcError::new("create the node", name, e))?;
+    // Resources of crashed processes would otherwise keep their ports
+    // counted against the service limits.
+    let cleanup = node.try_cleanup_dead_nodes();
+    if cleanup.cleanups > 0 {
+        tracing::info!(
+            removed = cleanup.cleanups,
+            "cleaned up resources of dead processes"
+        );
+    }
+    Ok(node)
+}
+
+fn service_name(name: &str) -> Result<ServiceName, IpcError> {
+    ServiceName::new(name).map_err(|e| IpcError::new("name the service", name, e))
+}
+
+type CloudService = PubSubFactory<ipc::Service, [CloudPoint], CloudHeader>;
+type EstimateService = PubSubFactory<ipc::Service, SlopeEstimate, ()>;
+
+fn cloud_service(node: &Node<ipc::Service>, name: &str) -> Result<CloudService, IpcError> {
+    node.service_builder(&service_name(name)?)
+        .publish_subscribe::<[CloudPoint]>()
+        .user_header::<CloudHeader>()
+        .max_publishers(1)
+        .max_subscribers(CLOUD_MAX_SUBSCRIBERS)
+        .subscriber_max_buffer_size(CLOUD_SUBSCRIBER_BUFFER)
+        .subscriber_max_borrowed_samples(1)
+        .history_size(0)
+        .enable_safe_overflow(true)
+        .open_or_create()
+        .map_err(|e| IpcError::new("open or create the cloud service", name, e))
+}
+
+fn estimate_service(node: &Node<ipc::Service>, name: &str) -> Result<EstimateService, IpcError> {
+    node.service_builder(&service_name(name)?)
+        .publish_subscribe::<SlopeEstimate>()
+        .max_publishers(1)
+        .max_subscribers(ESTIMATE_MAX_SUBSCRIBERS)
+        .subscriber_max_buffer_size(ESTIMATE_SUBSCRIBER_BUFFER)
+        .subscriber_max_borrowed_samples(2)
+        .history_size(0)
+        .enable_safe_overflow(true)
+        .open_or_create()
+        .map_err(|e| IpcError::new("open or create the estimate service", name, e))
+}
+
+fn event_service(
+    node: &Node<ipc::Service>,
+    name: &str,
+) -> Result<EventFactory<ipc::Service>, IpcError> {
+    node.service_builder(&service_name(name)?)
+        .event()
+        .max_listeners(32)
+        .max_notifiers(8)
+        .open_or_create()
+        .map_err(|e| IpcError::new("open or create the event service", name, e))
+}
+
+/// A listener on a topic's event service: what subscribers attach to a
+/// `WaitSet` to wake on new data.
+pub struct TopicListener {
+    listener: Listener<ipc::Service>,
+    service: String,
+}
+
+impl TopicListener {
+    fn create(node: &Node<ipc::Service>, name: &str) -> Result<Self, IpcError> {
+        let listener = event_service(node, name)?
+            .listener_builder()
+            .create()
+            .map_err(|e| IpcError::new("create a listener", name, e))?;
+        Ok(Self {
+            listener,
+            service: name.to_string(),
+        })
+    }
+
+    /// The port to attach to a `WaitSet`.
+    pub fn listener(&self) -> &Listener<ipc::Service> {
+        &self.listener
+    }
+
+    /// Consumes pending notifications without blocking; returns how many.
+    pub fn drain(&self) -> Result<u64, IpcError> {
+        self.listener
+            .try_wait(|_| {})
+            .map_err(|e| IpcError::new("read notifications", &self.service, e))
+    }
+
+    /// Blocks until a notification arrives or `timeout` passes.
+    pub fn wait(&self, timeout: Duration) -> Result<u64, IpcError> {
+        self.listener
+            .timed_wait(|_| {}, timeout)
+            .map_err(|e| IpcError::new("wait for notifications", &self.service, e))
+    }
+}
+
+fn create_notifier(
+    node: &Node<ipc::Service>,
+    name: &str,
+) -> Result<Notifier<ipc::Service>, IpcError> {
+    event_service(node, name)?
+        .notifier_builder()
+        .create()
+        .map_err(|e| IpcError::new("create a notifier", name, e))
+}
+
+/// Publishes organised clouds, projecting depth straight into shared memory.
+pub struct CloudPublisher {
+    service: CloudService,
+    publisher: Publisher<ipc::Service, [CloudPoint], CloudHeader>,
+    notifier: Notifier<ipc::Service>,
+    projector: Projector,
+    info: SourceInfo,
+    name: String,
+}
+
+impl CloudPublisher {
+    /// Creates the publisher for a source. Each sample holds exactly
+    /// `width * height` points; sources larger than `max_points` are refused.
+    pub fn create(
+        node: &Node<ipc::Service>,
+        names: &ServiceNames,
+        info: &SourceInfo,
+        max_points: usize,
+    ) -> Result<Self, IpcError> {
+        let name = names.cloud();
+        let points = info.width as usize * info.height as usize;
+        if points == 0 || points > max_points {
+            return Err(IpcError::new(
+                "create a publisher",
+                &name,
+                format!(
+                    "a {} x {} frame has {points} points; the limit is {max_points} (--max-points)",
+                    info.width, info.height
+                ),
+            ));
+        }
+        let service = cloud_service(node, &name)?;
+        let publisher = service
+            .publisher_builder()
+            .initial_max_slice_len(points)
+            .allocation_strategy(AllocationStrategy::Static)
+            .max_loaned_samples(1)
+            .create()
+            .map_err(|e| {
+                IpcError::new(
+                    "create a publisher (is another source already publishing?)",
+                    &name,
+                    e,
+                )
+            })?;
+        let notifier = create_notifier(node, &name)?;
+        let projector = Projector::new(info.width, info.height, info.intrinsics, info.unit_m);
+        Ok(Self {
+            service,
+            publisher,
+            notifier,
+            projector,
+            info: info.clone(),
+            name,
+        })
+    }
+
+    /// Subscribers currently connected to the cloud service.
+    pub fn subscriber_count(&self) -> usize {
+        self.service.dynamic_config().number_of_subscribers()
+    }
+
+    pub fn service_name(&self) -> &str {
+        &self.name
+    }
+
+    /// Projects `frame` into a loaned shared-memory sample and sends it.
+    ///
+    /// Zero-copy: every point is computed from the depth pixel and written
+    /// once, in place, into the sample that subscribers will read; there is
+    /// no intermediate cloud buffer.
+    pub fn publish(&self, frame: &SourceFrame) -> Result<(), PublishFrameError> {
+        let (width, height) = (self.info.width, self.info.height);
+        let depth = &frame.depth;
+        let points = self.projector.width() as usize * self.projector.height() as usize;
+        if depth.width != width || depth.height != height || depth.data.len() != points {
+            return Err(PublishFrameError::SizeMismatch {
+                index: frame.index,
+                width: depth.width,
+                height: depth.height,
+                expected_width: width,
+                expected_height: height,
+            });
+        }
+        let color = frame
+            .color
+            .as_ref()
+            .filter(|c| c.width == width && c.height == height && c.data.len() == points);
+        let mut sample = self
+            .publisher
+            .loan_slice_uninit(points)
+            .map_err(|e| IpcError::new("loan a sample", &self.name, e))?;
+        *sample.user_header_mut() = CloudHeader {
+            frame_index: frame.index,
+            capture_stamp_ns: frame.capture_stamp_ns,
+            source_stamp_ns: frame.source_stamp_ns,
+            width,
+            height,
+            intrinsics: self.info.intrinsics,
+            mount: self.info.mount,
+            source: self.info.source as u32,
+            has_color: u32::from(color.is_some()),
+        };
+        let projector = &self.projector;
+        let sample = match color {
+            Some(color) => sample.write_from_fn(|i| {
+                let [r, g, b] = color.data[i];
+                projector.point(i, depth.data[i], CloudPoint::pack_rgb(r, g, b))
+            }),
+            None => sample.write_from_fn(|i| projector.point(i, depth.data[i], 0)),
+        };
+        sample
+            .send()
+            .map_err(|e| IpcError::new("send a sample", &self.name, e))?;
+        self.notifier
+            .notify()
+            .map_err(|e| IpcError::new("notify subscribers", &self.name, e))?;
+        Ok(())
+    }
+}
+
+/// A received cloud, read in place from shared memory.
+pub struct CloudSample {
+    sample: Sample<ipc::Service, [CloudPoint], CloudHeader>,
+}
+
+impl CloudSample {
+    pub fn header(&self) -> &CloudHeader {
+        self.sample.user_header()
+    }
+
+    /// The points, in the publisher's shared-memory segment (not a copy).
+    pub fn points(&self) -> &[CloudPoint] {
+        self.sample.payload()
+    }
+}
+
+/// Subscribes to clouds and wakes on the cloud event.
+pub struct CloudSubscriber {
+    subscriber: Subscriber<ipc::Service, [CloudPoint], CloudHeader>,
+    listener: TopicListener,
+    name: String,
+}
+
+impl CloudSubscriber {
+    pub fn create(node: &Node<ipc::Service>, names: &ServiceNames) -> Result<Self, IpcError> {
+        let name = names.cloud();
+        let subscriber = cloud_service(node, &name)?
+            .subscriber_builder()
+            .create()
+            .map_err(|e| IpcError::new("create a subscriber", &name, e))?;
+        let listener = TopicListener::create(node, &name)?;
+        Ok(Self {
+            subscriber,
+            listener,
+            name,
+        })
+    }
+
+    pub fn listener(&self) -> &TopicListener {
+        &self.listener
+    }
+
+    pub fn service_name(&self) -> &str {
+        &self.name
+    }
+
+    pub fn receive(&self) -> Result<Option<CloudSample>, IpcError> {
+        self.subscriber
+            .receive()
+            .map(|s| s.map(|sample| CloudSample { sample }))
+            .map_err(|e| IpcError::new("receive a cloud", &self.name, e))
+    }
+
+    /// Receives everything waiting and returns the newest cloud, with how
+    /// many older ones were skipped because a newer one had arrived.
+    pub fn receive_newest(&self) -> Result<(Option<CloudSample>, u64), IpcError> {
+        let mut newest = None;
+        let mut skipped = 0;
+        while let Some(sample) = self.receive()? {
+            if newest.replace(sample).is_some() {
+                skipped += 1;
+            }
+        }
+        Ok((newest, skipped))
+    }
+}
+
+/// Publishes slope estimates.
+pub struct EstimatePublisher {
+    service: EstimateService,
+    publisher: Publisher<ipc::Service, SlopeEstimate, ()>,
+    notifier: Notifier<ipc::Service>,
+    name: String,
+}
+
+impl EstimatePublisher {
+    pub fn create(node: &Node<ipc::Service>, names: &ServiceNames) -> Result<Self, IpcError> {
+        let name = names.estimate();
+        let service = estimate_service(node, &name)?;
+        let publisher = service.publisher_builder().create().map_err(|e| {
+            IpcError::new(
+                "create a publisher (is another estimator already running?)",
+                &name,
+                e,
+            )
+        })?;
+        let notifier = create_notifier(node, &name)?;
+        Ok(Self {
+            service,
+            publisher,
+            notifier,
+            name,
+        })
+    }
+
+    pub fn subscriber_count(&self) -> usize {
+        self.service.dynamic_config().number_of_subscribers()
+    }
+
+    /// Stamps `publish_stamp_ns` and sends the estimate.
+    pub fn publish(&self, estimate: &SlopeEstimate) -> Result<SlopeEstimate, IpcError> {
+        let sample = self
+            .publisher
+            .loan_uninit()
+            .map_err(|e| IpcError::new("loan a sample", &self.name, e))?;
+        let mut message = *estimate;
+        message.publish_stamp_ns = now_ns();
+        sample
+            .write_payload(message)
+            .send()
+            .map_err(|e| IpcError::new("send an estimate", &self.name, e))?;
+        self.notifier
+            .notify()
+            .map_err(|e| IpcError::new("notify subscribers", &self.name, e))?;
+        Ok(message)
+    }
+}
+
+/// Subscribes to slope estimates and wakes on the estimate event.
+pub struct EstimateSubscriber {
+    subscriber: Subscriber<ipc::Service, SlopeEstimate, ()>,
+    listener: TopicListener,
+    name: String,
+}
+
+impl EstimateSubscriber {
+    pub fn create(node: &Node<ipc::Service>, names: &ServiceNames) -> Result<Self, IpcError> {
+        let name = names.estimate();
+        let subscriber = estimate_service(node, &name)?
+            .subscriber_builder()
+            .create()
+            .map_err(|e| IpcError::new("create a subscriber", &name, e))?;
+        let listener = TopicListener::create(node, &name)?;
+        Ok(Self {
+            subscriber,
+            listener,
+            name,
+        })
+    }
+
+    pub fn listener(&self) -> &TopicListener {
+        &self.listener
+    }
+
+    pub fn receive(&self) -> Result<Option<SlopeEstimate>, IpcError> {
+        self.subscriber
+            .receive()
+            .map(|s| s.map(|sample| *sample.payload()))
+            .map_err(|e| IpcError::new("receive an estimate", &self.name, e))
+    }
+}

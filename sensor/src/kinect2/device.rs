@@ -1,0 +1,826 @@
+//! Safe handles over the shim: the libfreenect2 context, an opened device,
+//! its frame listener and the frame sets it hands out.
+//!
+//! Ownership mirrors what libfreenect2 needs:
+//! - a [`Device`] keeps its [`Context`] alive (libfreenect2 deletes the
+//!   devices of a context when the context goes);
+//! - a device owns its listeners and frees them only after the device itself
+//!   is gone, because libfreenect2's processing threads may still deliver a
+//!   frame until the device's destructor has joined them;
+//! - a [`FrameSet`] borrows the device mutably, so nothing can stop the
+//!   streams or wait again while its frames are in use, and gives the frames
+//!   back to libfreenect2 when dropped.
+
+use std::ffi::c_char;
+use std::fmt;
+use std::marker::PhantomData;
+use std::ptr::NonNull;
+use std::str::FromStr;
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::time::Duration;
+
+use super::error::{Kinect2Error, ShimStatus};
+use super::log;
+use super::sys;
+
+/// Width of the depth and IR images, pixels.
+pub const DEPTH_WIDTH: usize = 512;
+/// Height of the depth and IR images, pixels.
+pub const DEPTH_HEIGHT: usize = 424;
+/// Width of the colour image, pixels.
+pub const COLOR_WIDTH: usize = 1920;
+/// Height of the colour image, pixels.
+pub const COLOR_HEIGHT: usize = 1080;
+
+/// libfreenect2's version, e.g. "0.2.0".
+pub fn library_version() -> String {
+    // SAFETY: f2s_version returns a pointer to a static NUL-terminated string.
+    let version = unsafe { std::ffi::CStr::from_ptr(sys::f2s_version()) };
+    version.to_string_lossy().into_owned()
+}
+
+fn check(
+    status: sys::f2s_status,
+    action: &'static str,
+    serial: Option<&str>,
+) -> Result<(), Kinect2Error> {
+    let status = ShimStatus::from_raw(status);
+    if status.is_ok() {
+        Ok(())
+    } else {
+        Err(Kinect2Error::Operation {
+            action,
+            serial: serial.map(str::to_string),
+            status,
+            libfreenect2_log: log::take_last_problem(),
+        })
+    }
+}
+
+/// Reads a string through a shim call that fills a caller buffer.
+fn read_string(
+    action: &'static str,
+    serial: Option<&str>,
+    mut call: impl FnMut(*mut c_char, usize, &mut usize) -> sys::f2s_status,
+) -> Result<String, Kinect2Error> {
+    let mut buffer = vec![0u8; 64];
+    loop {
+        let mut length = 0usize;
+        let status = call(buffer.as_mut_ptr().cast(), buffer.len(), &mut length);
+        if status == sys::f2s_status::F2S_ERR_BUFFER_TOO_SMALL && length + 1 > buffer.len() {
+            buffer.resize(length + 1, 0);
+            continue;
+        }
+        check(status, action, serial)?;
+        buffer.truncate(length.min(buffer.len()));
+        return Ok(String::from_utf8_lossy(&buffer).into_owned());
+    }
+}
+
+/// A depth packet pipeline: where libfreenect2 decodes depth.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Pipeline {
+    /// libfreenect2's own choice (the best one built in; GL first).
+    #[default]
+    Default,
+    Cpu,
+    OpenCl,
+    OpenClKde,
+    Cuda,
+    CudaKde,
+    /// Needs a display (an OpenGL context); headless robots want cl/cuda/cpu.
+    OpenGl,
+}
+
+impl Pipeline {
+    pub const ALL: [Pipeline; 7] = [
+        Self::Default,
+        Self::Cpu,
+        Self::OpenCl,
+        Self::OpenClKde,
+        Self::Cuda,
+        Self::CudaKde,
+        Self::OpenGl,
+    ];
+
+    /// The name used on command lines and in config files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Default => "default",
+            Self::Cpu => "cpu",
+            Self::OpenCl => "cl",
+            Self::OpenClKde => "clkde",
+            Self::Cuda => "cuda",
+            Self::CudaKde => "cudakde",
+            Self::OpenGl => "gl",
+        }
+    }
+
+    fn raw(self) -> sys::f2s_pipeline {
+        match self {
+            Self::Default => sys::f2s_pipeline::F2S_PIPELINE_DEFAULT,
+            Self::Cpu => sys::f2s_pipeline::F2S_PIPELINE_CPU,
+            Self::OpenCl => sys::f2s_pipeline::F2S_PIPELINE_OPENCL,
+            Self::OpenClKde => sys::f2s_pipeline::F2S_PIPELINE_OPENCL_KDE,
+            Self::Cuda => sys::f2s_pipeline::F2S_PIPELINE_CUDA,
+            Self::CudaKde => sys::f2s_pipeline::F2S_PIPELINE_CUDA_KDE,
+            Self::OpenGl => sys::f2s_pipeline::F2S_PIPELINE_OPENGL,
+        }
+    }
+
+    /// True when the installed libfreenect2 was built with this pipeline.
+    pub fn is_available(self) -> bool {
+        // SAFETY: a pure query of compile-time flags; any enum value is accepted.
+        unsafe { sys::f2s_pipeline_available(self.raw()) != 0 }
+    }
+
+    /// The pipelines the installed libfreenect2 offers.
+    pub fn available() -> Vec<Pipeline> {
+        Self::ALL.into_iter().filter(|p| p.is_available()).collect()
+    }
+}
+
+impl fmt::Display for Pipeline {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// An unknown pipeline name.
+#[derive(Debug, Clone, thiserror::Error)]
+#[error("unknown depth pipeline '{0}' (one of: default, cpu, cl, clkde, cuda, cudakde, gl)")]
+pub struct UnknownPipeline(pub String);
+
+impl FromStr for Pipeline {
+    type Err = UnknownPipeline;
+
+    fn from_str(text: &str) -> Result<Self, Self::Err> {
+        Self::ALL
+            .into_iter()
+            .find(|p| p.name().eq_ignore_ascii_case(text.trim()))
+            .ok_or_else(|| UnknownPipeline(text.to_string()))
+    }
+}
+
+/// Which device to open.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub enum DeviceSelector {
+    /// The first one enumerated.
+    #[default]
+    First,
+    /// By enumeration index (not stable across re-plugging).
+    Index(u32),
+    /// By serial number (stable; what a robot should use).
+    Serial(String),
+}
+
+/// libfreenect2's depth processing configuration (`Freenect2Device::Config`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DepthConfig {
+    /// Depth below this is dropped, metres.
+    pub min_depth_m: f32,
+    /// Depth beyond this is dropped, metres.
+    pub max_depth_m: f32,
+    /// Removes some flying pixels.
+    pub bilateral_filter: bool,
+    /// Removes pixels on depth edges (noisy on a time-of-flight camera).
+    pub edge_aware_filter: bool,
+}
+
+impl Default for DepthConfig {
+    /// libfreenect2's defaults (0.5 m, 4.5 m, both filters on).
+    fn default() -> Self {
+        let mut raw = sys::f2s_config::default();
+        // SAFETY: `raw` is a valid, writable f2s_config.
+        unsafe { sys::f2s_config_default(&mut raw) };
+        Self {
+            min_depth_m: raw.min_depth_m,
+            max_depth_m: raw.max_depth_m,
+            bilateral_filter: raw.bilateral_filter != 0,
+            edge_aware_filter: raw.edge_aware_filter != 0,
+        }
+    }
+}
+
+/// Intrinsics and distortion of the IR (depth) camera, as libfreenect2
+/// reports them: pixel centres at +0.5, images horizontally mirrored.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct IrParams {
+    pub fx: f32,
+    pub fy: f32,
+    pub cx: f32,
+    pub cy: f32,
+    pub k1: f32,
+    pub k2: f32,
+    pub k3: f32,
+    pub p1: f32,
+    pub p2: f32,
+}
+
+impl IrParams {
+    pub(crate) fn to_raw(self) -> sys::f2s_ir_params {
+        sys::f2s_ir_params {
+            fx: self.fx,
+            fy: self.fy,
+            cx: self.cx,
+            cy: self.cy,
+            k1: self.k1,
+            k2: self.k2,
+            k3: self.k3,
+            p1: self.p1,
+            p2: self.p2,
+        }
+    }
+
+    fn from_raw(raw: &sys::f2s_ir_params) -> Self {
+        Self {
+            fx: raw.fx,
+            fy: raw.fy,
+            cx: raw.cx,
+            cy: raw.cy,
+            k1: raw.k1,
+            k2: raw.k2,
+            k3: raw.k3,
+            p1: raw.p1,
+            p2: raw.p2,
+        }
+    }
+}
+
+/// The colour camera's factory parameters (intrinsics and the polynomial
+/// depth-to-colour mapping), exactly libfreenect2's `ColorCameraParams`.
+/// Kept in the raw layout: only the registration interprets them.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ColorParams(sys::f2s_color_params);
+
+impl ColorParams {
+    /// Parameters given field by field (a stored calibration, or a test).
+    pub fn from_raw(raw: sys::f2s_color_params) -> Self {
+        Self(raw)
+    }
+
+    pub fn raw(&self) -> &sys::f2s_color_params {
+        &self.0
+    }
+
+    /// Focal lengths and principal point of the 1920 x 1080 colour image:
+    /// `[fx, fy, cx, cy]`.
+    pub fn intrinsics(&self) -> [f32; 4] {
+        [self.0.fx, self.0.fy, self.0.cx, self.0.cy]
+    }
+}
+
+/// Owns a libfreenect2::Freenect2.
+struct ContextHandle(NonNull<sys::f2s_context>);
+
+// SAFETY: libfreenect2::Freenect2 has no thread affinity (its USB event thread
+// is internal); every use goes through the Mutex in `Context`, so it is never
+// used from two threads at once.
+unsafe impl Send for ContextHandle {}
+
+impl Drop for ContextHandle {
+    fn drop(&mut self) {
+        // SAFETY: the pointer came from f2s_context_new and is freed once,
+        // here. Every Device holds an Arc to this handle, so no device of
+        // this context is alive any more.
+        unsafe { sys::f2s_context_free(self.0.as_ptr()) };
+    }
+}
+
+type SharedContext = Arc<Mutex<ContextHandle>>;
+
+fn lock(context: &SharedContext) -> MutexGuard<'_, ContextHandle> {
+    // A panic while holding the lock cannot leave the C++ object half
+    // updated (the shim catches everything), so a poisoned lock is usable.
+    context.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+/// The libfreenect2 context: enumerates and opens devices.
+pub struct Context {
+    inner: SharedContext,
+}
+
+impl Context {
+    /// Creates a context (and libfreenect2's USB context). Routes
+    /// libfreenect2's log into `tracing` on first use.
+    pub fn new() -> Result<Self, Kinect2Error> {
+        log::install();
+        let mut raw = std::ptr::null_mut();
+        // SAFETY: `raw` is a valid out-pointer.
+        check(unsafe { sys::f2s_context_new(&mut raw) }, "create the libfreenect2 context", None)?;
+        let handle = NonNull::new(raw).ok_or(Kinect2Error::Operation {
+            action: "create the libfreenect2 context",
+            serial: None,
+            status: ShimStatus(sys::f2s_status::F2S_ERR_NULL_ARGUMENT.0),
+            libfreenect2_log: None,
+        })?;
+        Ok(Self {
+            inner: Arc::new(Mutex::new(ContextHandle(handle))),
+        })
+    }
+
+    /// Re-enumerates the USB bus and returns the serials of the connected
+    /// Kinect v2 devices, in enumeration order.
+    pub fn enumerate(&self) -> Result<Vec<String>, Kinect2Error> {
+        let guard = lock(&self.inner);
+        let context = guard.0.as_ptr();
+        let mut count = 0i32;
+        log::clear_last_problem();
+        // SAFETY: `context` is alive (we hold its lock) and `count` is writable.
+        check(
+            unsafe { sys::f2s_context_enumerate(context, &mut count) },
+            "enumerate USB devices",
+            None,
+        )?;
+        (0..count)
+            .map(|index| {
+                read_string("read a device serial", None, |buffer, capacity, length| {
+                    // SAFETY: `context` is alive; `buffer` holds `capacity`
+                    // writable bytes; `length` is writable.
+                    unsafe { sys::f2s_context_serial(context, index, buffer, capacity, length) }
+                })
+            })
+            .collect()
+    }
+
+    /// Opens a device with a depth pipeline. `gpu_device` picks the OpenCL
+    /// or CUDA device (`None`: libfreenect2's default).
+    pub fn open(
+        &self,
+        selector: &DeviceSelector,
+        pipeline: Pipeline,
+        gpu_device: Option<u32>,
+    ) -> Result<Device, Kinect2Error> {
+        if !pipeline.is_available() {
+            return Err(Kinect2Error::PipelineUnavailable {
+                pipeline: pipeline.name(),
+                available: Pipeline::available()
+                    .iter()
+                    .map(|p| p.name())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            });
+        }
+        let serials = self.enumerate()?;
+        if serials.is_empty() {
+            return Err(Kinect2Error::NoDevice {
+                version: library_version(),
+                libfreenect2_log: log::take_last_problem(),
+            });
+        }
+        let (index, serial) = match selector {
+            DeviceSelector::First => (0, serials[0].clone()),
+            DeviceSelector::Index(index) => match serials.get(*index as usize) {
+                Some(serial) => (*index, serial.clone()),
+                None => {
+                    return Err(Kinect2Error::IndexOutOfRange {
+                        index: *index,
+                        count: serials.len() as u32,
+                    })
+                }
+            },
+            DeviceSelector::Serial(wanted) => match serials.iter().position(|s| s == wanted) {
+                Some(index) => (index as u32, wanted.clone()),
+                None => {
+                    return Err(Kinect2Error::SerialNotFound {
+                        serial: wanted.clone(),
+                        connected: serials,
+                    })
+                }
+            },
+        };
+        let gpu = gpu_device.map_or(-1, |id| i32::try_from(id).unwrap_or(i32::MAX));
+        let index = i32::try_from(index).unwrap_or(i32::MAX);
+        let guard = lock(&self.inner);
+        let mut raw = std::ptr::null_mut();
+        log::clear_last_problem();
+        // SAFETY: the context is alive (we hold its lock); `raw` is a valid
+        // out-pointer. The shim hands the pipeline's ownership to libfreenect2.
+        let status = unsafe {
+            sys::f2s_context_open_index(guard.0.as_ptr(), index, pipeline.raw(), gpu, &mut raw)
+        };
+        drop(guard);
+        check(status, "open the device", Some(&serial))?;
+        let handle = NonNull::new(raw).ok_or_else(|| Kinect2Error::Operation {
+            action: "open the device",
+            serial: Some(serial.clone()),
+            status: ShimStatus(sys::f2s_status::F2S_ERR_OPEN_FAILED.0),
+            libfreenect2_log: log::take_last_problem(),
+        })?;
+        Ok(Device {
+            handle,
+            context: Arc::clone(&self.inner),
+            serial,
+            pipeline,
+            listener: None,
+            retired_listeners: Vec::new(),
+            streaming: false,
+        })
+    }
+}
+
+/// Which streams to run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Streams {
+    pub color: bool,
+    pub depth: bool,
+}
+
+impl Streams {
+    pub const DEPTH: Streams = Streams {
+        color: false,
+        depth: true,
+    };
+    pub const DEPTH_AND_COLOR: Streams = Streams {
+        color: true,
+        depth: true,
+    };
+
+    fn frame_types(self) -> u32 {
+        let mut types = 0;
+        if self.color {
+            types |= sys::f2s_frame_type::F2S_FRAME_COLOR.0;
+        }
+        if self.depth {
+            types |= sys::f2s_frame_type::F2S_FRAME_IR.0 | sys::f2s_frame_type::F2S_FRAME_DEPTH.0;
+        }
+        types
+    }
+}
+
+/// Owns a libfreenect2::SyncMultiFrameListener.
+struct Listener {
+    handle: NonNull<sys::f2s_listener>,
+    types: u32,
+}
+
+impl Listener {
+    fn new(types: u32, serial: &str) -> Result<Self, Kinect2Error> {
+        let mut raw = std::ptr::null_mut();
+        // SAFETY: `raw` is a valid out-pointer.
+        check(
+            unsafe { sys::f2s_listener_new(types, &mut raw) },
+            "create a frame listener",
+            Some(serial),
+        )?;
+        let handle = NonNull::new(raw).ok_or_else(|| Kinect2Error::Operation {
+            action: "create a frame listener",
+            serial: Some(serial.to_string()),
+            status: ShimStatus(sys::f2s_status::F2S_ERR_NULL_ARGUMENT.0),
+            libfreenect2_log: None,
+        })?;
+        Ok(Self { handle, types })
+    }
+}
+
+// SAFETY: SyncMultiFrameListener synchronises internally (a mutex and a
+// condition variable) between libfreenect2's threads and the waiting one.
+unsafe impl Send for Listener {}
+
+impl Drop for Listener {
+    fn drop(&mut self) {
+        // SAFETY: the pointer came from f2s_listener_new and is freed once.
+        // The Device drops its listeners only after freeing the device, so
+        // libfreenect2 no longer holds it.
+        unsafe { sys::f2s_listener_free(self.handle.as_ptr()) };
+    }
+}
+
+/// An opened Kinect v2.
+pub struct Device {
+    handle: NonNull<sys::f2s_device>,
+    context: SharedContext,
+    serial: String,
+    pipeline: Pipeline,
+    /// The listener of the current streams.
+    listener: Option<Listener>,
+    /// Listeners of earlier starts: libfreenect2 may still deliver to them
+    /// until the device is freed.
+    retired_listeners: Vec<Listener>,
+    streaming: bool,
+}
+
+// SAFETY: a Freenect2Device has no thread affinity; all mutation goes through
+// `&mut self`, and the context it touches on drop is behind a Mutex.
+unsafe impl Send for Device {}
+
+impl fmt::Debug for Device {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Device")
+            .field("serial", &self.serial)
+            .field("pipeline", &self.pipeline)
+            .field("streaming", &self.streaming)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Device {
+    pub fn serial(&self) -> &str {
+        &self.serial
+    }
+
+    pub fn pipeline(&self) -> Pipeline {
+        self.pipeline
+    }
+
+    pub fn is_streaming(&self) -> bool {
+        self.streaming
+    }
+
+    pub fn firmware_version(&mut self) -> Result<String, Kinect2Error> {
+        let device = self.handle.as_ptr();
+        read_string("read the firmware version", Some(&self.serial), |buffer, capacity, length| {
+            // SAFETY: `device` is open; `buffer` holds `capacity` writable bytes.
+            unsafe { sys::f2s_device_firmware(device, buffer, capacity, length) }
+        })
+    }
+
+    /// Applies a depth configuration; only before [`Device::start`] or after
+    /// [`Device::stop`].
+    pub fn set_depth_config(&mut self, config: &DepthConfig) -> Result<(), Kinect2Error> {
+        let raw = sys::f2s_config {
+            min_depth_m: config.min_depth_m,
+            max_depth_m: config.max_depth_m,
+            bilateral_filter: i32::from(config.bilateral_filter),
+            edge_aware_filter: i32::from(config.edge_aware_filter),
+        };
+        // SAFETY: the device is open and `raw` is a valid config.
+        let status = unsafe { sys::f2s_device_set_config(self.handle.as_ptr(), &raw) };
+        check(status, "configure depth processing", Some(&self.serial))
+    }
+
+    /// The IR camera's factory parameters. libfreenect2 reads them from the
+    /// device during [`Device::start`]; before that they are placeholders.
+    pub fn ir_params(&mut self) -> Result<IrParams, Kinect2Error> {
+        let mut raw = sys::f2s_ir_params::default();
+        // SAFETY: the device is open and `raw` is writable.
+        let status = unsafe { sys::f2s_device_ir_params(self.handle.as_ptr(), &mut raw) };
+        check(status, "read the IR camera parameters", Some(&self.serial))?;
+        Ok(IrParams::from_raw(&raw))
+    }
+
+    /// The colour camera's factory parameters (valid after start, as above).
+    pub fn color_params(&mut self) -> Result<ColorParams, Kinect2Error> {
+        let mut raw = sys::f2s_color_params::default();
+        // SAFETY: the device is open and `raw` is writable.
+        let status = unsafe { sys::f2s_device_color_params(self.handle.as_ptr(), &mut raw) };
+        check(status, "read the colour camera parameters", Some(&self.serial))?;
+        Ok(ColorParams(raw))
+    }
+
+    /// Starts the streams (depth only, or depth and colour).
+    pub fn start(&mut self, streams: Streams) -> Result<(), Kinect2Error> {
+        if self.streaming {
+            self.stop()?;
+        }
+        let types = streams.frame_types();
+        if self.listener.as_ref().map(|l| l.types) != Some(types) {
+            let listener = Listener::new(types, &self.serial)?;
+            // SAFETY: the device is open and not streaming; the listener
+            // lives until after the device is freed (see Drop).
+            let status =
+                unsafe { sys::f2s_device_set_listener(self.handle.as_ptr(), listener.handle.as_ptr()) };
+            check(status, "attach the frame listener", Some(&self.serial))?;
+            if let Some(old) = self.listener.replace(listener) {
+                self.retired_listeners.push(old);
+            }
+        }
+        log::clear_last_problem();
+        // SAFETY: the device is open with a listener attached.
+        let status = unsafe {
+            sys::f2s_device_start(self.handle.as_ptr(), i32::from(streams.color), i32::from(streams.depth))
+        };
+        check(status, "start the streams", Some(&self.serial))?;
+        self.streaming = true;
+        Ok(())
+    }
+
+    /// Stops the streams. The listener stays attached (and alive) until the
+    /// device is dropped.
+    pub fn stop(&mut self) -> Result<(), Kinect2Error> {
+        if !self.streaming {
+            return Ok(());
+        }
+        self.streaming = false;
+        log::clear_last_problem();
+        // SAFETY: the device is open.
+        let status = unsafe { sys::f2s_device_stop(self.handle.as_ptr()) };
+        check(status, "stop the streams", Some(&self.serial))
+    }
+
+    /// Waits up to `timeout` for a complete frame set; `Ok(None)` on timeout.
+    pub fn wait_for_frames(&mut self, timeout: Duration) -> Result<Option<FrameSet<'_>>, Kinect2Error> {
+        let Some(listener) = self.listener.as_mut() else {
+            return Err(Kinect2Error::Operation {
+                action: "wait for frames before starting the streams",
+                serial: Some(self.serial.clone()),
+                status: ShimStatus(sys::f2s_status::F2S_ERR_NO_FRAME.0),
+                libfreenect2_log: None,
+            });
+        };
+        let timeout_ms = i32::try_from(timeout.as_millis()).unwrap_or(i32::MAX);
+        // SAFETY: the listener is alive; it holds no frames that a FrameSet
+        // still borrows (a FrameSet borrows `self` mutably).
+        let status = unsafe { sys::f2s_listener_wait(listener.handle.as_ptr(), timeout_ms) };
+        if status == sys::f2s_status::F2S_ERR_TIMEOUT {
+            return Ok(None);
+        }
+        check(status, "wait for frames", Some(&self.serial))?;
+        Ok(Some(FrameSet {
+            listener: listener.handle,
+            serial: &self.serial,
+            _device: PhantomData,
+        }))
+    }
+}
+
+impl Drop for Device {
+    fn drop(&mut self) {
+        if self.streaming {
+            if let Err(err) = self.stop() {
+                tracing::warn!(error = %err, "stopping the Kinect v2 streams failed");
+            }
+        }
+        let guard = lock(&self.context);
+        // SAFETY: the pointer came from f2s_context_open_* and is freed once,
+        // here, while its context is alive (we hold an Arc and its lock). The
+        // destructor closes the device and joins its processing threads, so
+        // afterwards nothing delivers to our listeners.
+        unsafe { sys::f2s_device_free(self.handle.as_ptr()) };
+        drop(guard);
+        // Only now may the listeners go.
+        self.listener = None;
+        self.retired_listeners.clear();
+    }
+}
+
+/// A complete set of frames (depth and IR, and colour when streaming it),
+/// held until dropped.
+pub struct FrameSet<'d> {
+    listener: NonNull<sys::f2s_listener>,
+    serial: &'d str,
+    _device: PhantomData<&'d mut Device>,
+}
+
+impl FrameSet<'_> {
+    fn frame(&self, kind: sys::f2s_frame_type) -> Option<FrameView<'_>> {
+        let mut raw = sys::f2s_frame_view::default();
+        // SAFETY: the listener is alive and holds this set's frames while
+        // `self` exists; `raw` is writable.
+        let status = unsafe { sys::f2s_listener_frame(self.listener.as_ptr(), kind, &mut raw) };
+        if status != sys::f2s_status::F2S_OK || raw.data.is_null() {
+            return None;
+        }
+        Some(FrameView {
+            raw,
+            _set: PhantomData,
+        })
+    }
+
+    /// The depth frame: 512 x 424 float millimetres (mirrored, distorted).
+    pub fn depth(&self) -> Option<FrameView<'_>> {
+        self.frame(sys::f2s_frame_type::F2S_FRAME_DEPTH)
+    }
+
+    /// The IR frame: 512 x 424 float intensities.
+    pub fn ir(&self) -> Option<FrameView<'_>> {
+        self.frame(sys::f2s_frame_type::F2S_FRAME_IR)
+    }
+
+    /// The colour frame: 1920 x 1080, 4 bytes per pixel (BGRX or RGBX).
+    pub fn color(&self) -> Option<FrameView<'_>> {
+        self.frame(sys::f2s_frame_type::F2S_FRAME_COLOR)
+    }
+
+    /// The serial of the device the set came from.
+    pub fn serial(&self) -> &str {
+        self.serial
+    }
+}
+
+impl Drop for FrameSet<'_> {
+    fn drop(&mut self) {
+        // SAFETY: the listener is alive (the device that owns it is borrowed
+        // for our lifetime); releasing gives the frames back to libfreenect2
+        // and no FrameView outlives `self`.
+        unsafe { sys::f2s_listener_release(self.listener.as_ptr()) };
+    }
+}
+
+/// Pixel layout of a frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FrameFormat {
+    Invalid,
+    Raw,
+    Float,
+    Bgrx,
+    Rgbx,
+    Gray,
+    Unknown(u32),
+}
+
+impl FrameFormat {
+    fn from_raw(raw: u32) -> Self {
+        match sys::f2s_frame_format(raw) {
+            sys::f2s_frame_format::F2S_FORMAT_INVALID => Self::Invalid,
+            sys::f2s_frame_format::F2S_FORMAT_RAW => Self::Raw,
+            sys::f2s_frame_format::F2S_FORMAT_FLOAT => Self::Float,
+            sys::f2s_frame_format::F2S_FORMAT_BGRX => Self::Bgrx,
+            sys::f2s_frame_format::F2S_FORMAT_RGBX => Self::Rgbx,
+            sys::f2s_frame_format::F2S_FORMAT_GRAY => Self::Gray,
+            _ => Self::Unknown(raw),
+        }
+    }
+
+    fn to_raw(self) -> u32 {
+        match self {
+            Self::Invalid => sys::f2s_frame_format::F2S_FORMAT_INVALID.0,
+            Self::Raw => sys::f2s_frame_format::F2S_FORMAT_RAW.0,
+            Self::Float => sys::f2s_frame_format::F2S_FORMAT_FLOAT.0,
+            Self::Bgrx => sys::f2s_frame_format::F2S_FORMAT_BGRX.0,
+            Self::Rgbx => sys::f2s_frame_format::F2S_FORMAT_RGBX.0,
+            Self::Gray => sys::f2s_frame_format::F2S_FORMAT_GRAY.0,
+            Self::Unknown(raw) => raw,
+        }
+    }
+}
+
+/// A read-only view of one frame: pixels owned by libfreenect2 (borrowed
+/// from a [`FrameSet`]) or by the caller ([`FrameView::from_bytes`]).
+#[derive(Debug, Clone, Copy)]
+pub struct FrameView<'a> {
+    raw: sys::f2s_frame_view,
+    _set: PhantomData<&'a [u8]>,
+}
+
+impl<'a> FrameView<'a> {
+    /// A view of caller-owned pixels (e.g. a stored frame, or a test image);
+    /// `None` when `data` is not `width * height * bytes_per_pixel` long.
+    pub fn from_bytes(
+        width: usize,
+        height: usize,
+        bytes_per_pixel: usize,
+        format: FrameFormat,
+        data: &'a [u8],
+    ) -> Option<Self> {
+        let len = width.checked_mul(height)?.checked_mul(bytes_per_pixel)?;
+        if data.len() != len {
+            return None;
+        }
+        Some(Self {
+            raw: sys::f2s_frame_view {
+                width,
+                height,
+                bytes_per_pixel,
+                data: data.as_ptr(),
+                format: format.to_raw(),
+                ..Default::default()
+            },
+            _set: PhantomData,
+        })
+    }
+
+    pub fn width(&self) -> usize {
+        self.raw.width
+    }
+
+    pub fn height(&self) -> usize {
+        self.raw.height
+    }
+
+    pub fn bytes_per_pixel(&self) -> usize {
+        self.raw.bytes_per_pixel
+    }
+
+    pub fn format(&self) -> FrameFormat {
+        FrameFormat::from_raw(self.raw.format)
+    }
+
+    /// 0 when libfreenect2 decoded the frame without error.
+    pub fn status(&self) -> u32 {
+        self.raw.status
+    }
+
+    /// Device time, units of 0.125 ms (wraps after about 6 days).
+    pub fn timestamp(&self) -> u32 {
+        self.raw.timestamp
+    }
+
+    /// The device's frame sequence number.
+    pub fn sequence(&self) -> u32 {
+        self.raw.sequence
+    }
+
+    /// The pixels, `width * height * bytes_per_pixel` bytes.
+    pub fn data(&self) -> &'a [u8] {
+        let len = self.raw.width * self.raw.height * self.raw.bytes_per_pixel;
+        // SAFETY: libfreenect2 (or `from_bytes`) guarantees `data` points to
+        // `width * height * bytes_per_pixel` readable bytes that stay valid and
+        // unchanged for 'a (until the FrameSet releases them).
+        unsafe { std::slice::from_raw_parts(self.raw.data, len) }
+    }
+
+    pub(crate) fn raw(&self) -> &sys::f2s_frame_view {
+        &self.raw
+    }
+}

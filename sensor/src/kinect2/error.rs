@@ -1,0 +1,114 @@
+//! Errors of the Kinect v2 layer. Each says which device (serial) and which
+//! operation failed, and carries the last error libfreenect2 logged, which
+//! usually names the USB cause (permissions, bandwidth, a lost device).
+
+use std::fmt;
+
+use super::sys;
+
+/// A failed libfreenect2 call through the shim, as reported by the shim.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ShimStatus(pub u32);
+
+impl ShimStatus {
+    pub(crate) fn from_raw(status: sys::f2s_status) -> Self {
+        Self(status.0)
+    }
+
+    pub(crate) fn is_ok(self) -> bool {
+        self.0 == sys::f2s_status::F2S_OK.0
+    }
+
+    fn describe(self) -> &'static str {
+        match sys::f2s_status(self.0) {
+            sys::f2s_status::F2S_OK => "ok",
+            sys::f2s_status::F2S_ERR_NULL_ARGUMENT => "null argument",
+            sys::f2s_status::F2S_ERR_NOT_FOUND => "not found",
+            sys::f2s_status::F2S_ERR_OPEN_FAILED => "libfreenect2 could not open the device",
+            sys::f2s_status::F2S_ERR_PIPELINE_UNAVAILABLE => {
+                "the depth pipeline is not built into libfreenect2"
+            }
+            sys::f2s_status::F2S_ERR_START_FAILED => "libfreenect2 could not start the streams",
+            sys::f2s_status::F2S_ERR_STOP_FAILED => "libfreenect2 could not stop the streams",
+            sys::f2s_status::F2S_ERR_CLOSE_FAILED => "libfreenect2 could not close the device",
+            sys::f2s_status::F2S_ERR_TIMEOUT => "timed out",
+            sys::f2s_status::F2S_ERR_NO_FRAME => "the frame set lacks that frame",
+            sys::f2s_status::F2S_ERR_BAD_SIZE => "an image has the wrong size",
+            sys::f2s_status::F2S_ERR_BUFFER_TOO_SMALL => "a buffer is too small",
+            sys::f2s_status::F2S_ERR_EXCEPTION => "libfreenect2 threw a C++ exception",
+            _ => "unknown shim status",
+        }
+    }
+}
+
+impl fmt::Display for ShimStatus {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} (status {})", self.describe(), self.0)
+    }
+}
+
+/// Everything the Kinect v2 layer can report.
+#[derive(Debug, thiserror::Error)]
+pub enum Kinect2Error {
+    /// libfreenect2 enumerated no Kinect v2 on the USB bus.
+    #[error(
+        "no Kinect v2 found (libfreenect2 {version} enumerated 0 devices){}; check that it is \
+         powered, on a USB 3 port, and that the udev rules allow access \
+         (README \"Running on the robot\")",
+        log_suffix(.libfreenect2_log)
+    )]
+    NoDevice {
+        version: String,
+        libfreenect2_log: Option<String>,
+    },
+    /// A serial was asked for that is not connected.
+    #[error("no Kinect v2 with serial {serial} is connected (connected: {})", list(.connected))]
+    SerialNotFound {
+        serial: String,
+        connected: Vec<String>,
+    },
+    /// A device index was asked for that is not connected.
+    #[error("no Kinect v2 at index {index}: {count} connected")]
+    IndexOutOfRange { index: u32, count: u32 },
+    /// The chosen depth pipeline is not compiled into libfreenect2.
+    #[error(
+        "the '{pipeline}' depth pipeline is not built into this libfreenect2 \
+         (available: {available}); rebuild libfreenect2 with it or choose another"
+    )]
+    PipelineUnavailable {
+        pipeline: &'static str,
+        available: String,
+    },
+    /// A libfreenect2 operation failed.
+    #[error("failed to {action} (Kinect v2 {}): {status}{}", serial.as_deref().unwrap_or("-"), log_suffix(.libfreenect2_log))]
+    Operation {
+        action: &'static str,
+        serial: Option<String>,
+        status: ShimStatus,
+        libfreenect2_log: Option<String>,
+    },
+    /// A frame from the device does not have the layout libfreenect2 documents.
+    #[error("Kinect v2 {serial}: {what}")]
+    UnexpectedFrame { serial: String, what: String },
+    /// Images handed to the registration have the wrong size.
+    #[error("registration needs {expected} but got {got}")]
+    BadImageSize { expected: String, got: String },
+    /// A serial number with an interior NUL byte.
+    #[error("invalid serial number {0:?}")]
+    InvalidSerial(String),
+}
+
+fn log_suffix(log: &Option<String>) -> String {
+    match log {
+        Some(line) => format!(" (libfreenect2: {line})"),
+        None => String::new(),
+    }
+}
+
+fn list(items: &[String]) -> String {
+    if items.is_empty() {
+        "none".to_string()
+    } else {
+        items.join(", ")
+    }
+}

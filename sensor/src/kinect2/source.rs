@@ -1,0 +1,413 @@
+//! [`Kinect2Source`]: the Kinect v2 as a [`FrameSource`], feeding the same
+//! publishing code as a recording.
+//!
+//! It owns the whole device life cycle: waiting for a device to appear,
+//! starting the streams, undistorting and registering each frame set,
+//! skipping (and counting) frames that libfreenect2 flags as bad, and, when
+//! frames stop coming (a pulled cable, a USB reset), dropping the device and
+//! reopening the same serial with exponential backoff, without ending the
+//! stream. Every wait honours the [`StopFlag`], so SIGINT/SIGTERM stop it
+//! within one wait slice.
+
+use std::time::{Duration, Instant};
+
+use slope_ipc_types::{CloudSource, Mount};
+
+use super::convert::{unmirror_color, unmirror_depth, unmirrored_intrinsics, DEPTH_UNIT_M};
+use super::device::{
+    Context, DepthConfig, Device, DeviceSelector, FrameFormat, IrParams, Pipeline, Streams,
+    DEPTH_HEIGHT, DEPTH_WIDTH,
+};
+use super::error::Kinect2Error;
+use super::registration::{Registration, DEPTH_PIXELS};
+use crate::publish::StopFlag;
+use crate::recording::ColorImage;
+use crate::source::{FrameSource, SourceError, SourceFrame, SourceInfo};
+
+/// How to run the Kinect v2.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Kinect2Options {
+    pub device: DeviceSelector,
+    pub pipeline: Pipeline,
+    /// OpenCL/CUDA device id; `None` for libfreenect2's default.
+    pub gpu_device: Option<u32>,
+    pub depth: DepthConfig,
+    /// Also stream colour and register it to the depth image.
+    pub color: bool,
+    /// Drop colour pixels hidden behind nearer depth (libfreenect2's
+    /// registration filter).
+    pub registration_filter: bool,
+    /// The camera's pose on the robot, passed on with every cloud.
+    pub mount: Mount,
+    /// Keep retrying when no device is connected instead of failing.
+    pub wait_for_device: bool,
+    /// No frame for this long means the device is lost: reconnect.
+    pub frame_timeout: Duration,
+    /// First wait between reconnection attempts; doubles up to
+    /// `max_backoff`.
+    pub min_backoff: Duration,
+    pub max_backoff: Duration,
+}
+
+impl Default for Kinect2Options {
+    fn default() -> Self {
+        Self {
+            device: DeviceSelector::First,
+            pipeline: Pipeline::Default,
+            gpu_device: None,
+            depth: DepthConfig::default(),
+            color: true,
+            registration_filter: true,
+            mount: Mount::UNKNOWN,
+            wait_for_device: false,
+            frame_timeout: Duration::from_secs(3),
+            min_backoff: Duration::from_millis(500),
+            max_backoff: Duration::from_secs(10),
+        }
+    }
+}
+
+/// What happened to the stream so far.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct CaptureStats {
+    /// Frame sets delivered as frames.
+    pub frames: u64,
+    /// Frame sets skipped because a frame had a non-zero status.
+    pub bad_status: u64,
+    /// Frame sets skipped because a frame was missing or misshapen.
+    pub malformed: u64,
+    /// Times the device was declared lost (no frame within the timeout).
+    pub lost: u64,
+    /// Successful reopenings after a loss.
+    pub reconnects: u64,
+    /// Failed attempts to (re)open a device.
+    pub failed_opens: u64,
+}
+
+/// Slice of every blocking wait, so that a stop request is seen quickly.
+const WAIT_SLICE: Duration = Duration::from_millis(200);
+
+/// A started device with what it needs to convert frames.
+struct Running {
+    device: Device,
+    registration: Registration,
+    last_frame: Instant,
+}
+
+/// The Kinect v2 as a frame source.
+pub struct Kinect2Source {
+    options: Kinect2Options,
+    context: Context,
+    running: Option<Running>,
+    /// The serial opened first; reconnects reopen exactly this device.
+    serial: String,
+    ir: IrParams,
+    info: SourceInfo,
+    stop: StopFlag,
+    stats: CaptureStats,
+    next_index: u64,
+    backoff: Duration,
+    undistorted: Vec<f32>,
+    registered: Vec<u32>,
+}
+
+impl std::fmt::Debug for Kinect2Source {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Kinect2Source")
+            .field("serial", &self.serial)
+            .field("info", &self.info)
+            .field("stats", &self.stats)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Kinect2Source {
+    /// Opens and starts the device. With `wait_for_device`, retries (with
+    /// backoff) until one appears; `Ok(None)` when `stop` was set first.
+    /// Without it, fails at once when no Kinect v2 is connected.
+    pub fn open(options: Kinect2Options, stop: StopFlag) -> Result<Option<Self>, Kinect2Error> {
+        let context = Context::new()?;
+        let mut backoff = options.min_backoff;
+        let mut failed_opens = 0;
+        let running = loop {
+            if stop.is_stopped() {
+                return Ok(None);
+            }
+            match start_device(&context, &options, &options.device) {
+                Ok(running) => break running,
+                Err(err) if options.wait_for_device && is_retryable(&err) => {
+                    failed_opens += 1;
+                    tracing::warn!(error = %err, retry_in = ?backoff, "waiting for a Kinect v2");
+                    if !stop.sleep(backoff) {
+                        return Ok(None);
+                    }
+                    backoff = (backoff * 2).min(options.max_backoff);
+                }
+                Err(err) => return Err(err),
+            }
+        };
+        let serial = running.device.serial().to_string();
+        let ir = *running.registration.ir_params();
+        let info = SourceInfo {
+            width: DEPTH_WIDTH as u32,
+            height: DEPTH_HEIGHT as u32,
+            intrinsics: unmirrored_intrinsics(&ir, DEPTH_WIDTH as u32),
+            unit_m: DEPTH_UNIT_M,
+            mount: options.mount,
+            source: CloudSource::Camera,
+            has_color: options.color,
+        };
+        tracing::info!(
+            serial,
+            pipeline = %running.device.pipeline(),
+            fx = info.intrinsics.fx,
+            fy = info.intrinsics.fy,
+            cx = info.intrinsics.cx,
+            cy = info.intrinsics.cy,
+            color = options.color,
+            "Kinect v2 streaming"
+        );
+        Ok(Some(Self {
+            backoff: options.min_backoff,
+            options,
+            context,
+            running: Some(running),
+            serial,
+            ir,
+            info,
+            stop,
+            stats: CaptureStats {
+                failed_opens,
+                ..CaptureStats::default()
+            },
+            next_index: 0,
+            undistorted: vec![0.0; DEPTH_PIXELS],
+            registered: vec![0; DEPTH_PIXELS],
+        }))
+    }
+
+    /// The serial of the device being streamed.
+    pub fn serial(&self) -> &str {
+        &self.serial
+    }
+
+    /// libfreenect2's IR camera parameters (mirrored, +0.5 convention).
+    pub fn ir_params(&self) -> &IrParams {
+        &self.ir
+    }
+
+    pub fn stats(&self) -> CaptureStats {
+        self.stats
+    }
+
+    /// True while a device is open and streaming.
+    pub fn is_connected(&self) -> bool {
+        self.running.is_some()
+    }
+
+    /// Stops the streams and closes the device now (also done on drop).
+    pub fn close(&mut self) {
+        if let Some(mut running) = self.running.take() {
+            if let Err(err) = running.device.stop() {
+                tracing::warn!(error = %err, "stopping the Kinect v2 failed");
+            }
+            // Dropping the device closes it, then frees its listener.
+        }
+    }
+
+    /// Tries to reopen the device after a loss, waiting the current backoff
+    /// first. Returns false if stopped.
+    fn reconnect(&mut self) -> bool {
+        if !self.stop.sleep(self.backoff) {
+            return false;
+        }
+        let selector = DeviceSelector::Serial(self.serial.clone());
+        match start_device(&self.context, &self.options, &selector) {
+            Ok(running) => {
+                let ir = *running.registration.ir_params();
+                if ir != self.ir {
+                    tracing::warn!(
+                        serial = self.serial,
+                        "the reconnected device reports other IR parameters; keeping the first ones"
+                    );
+                }
+                self.running = Some(running);
+                self.stats.reconnects += 1;
+                self.backoff = self.options.min_backoff;
+                tracing::info!(serial = self.serial, reconnects = self.stats.reconnects, "Kinect v2 reconnected");
+            }
+            Err(err) => {
+                self.stats.failed_opens += 1;
+                let next = (self.backoff * 2).min(self.options.max_backoff);
+                tracing::warn!(serial = self.serial, error = %err, retry_in = ?next, "reconnecting failed");
+                self.backoff = next;
+            }
+        }
+        true
+    }
+
+    /// Converts the frame set in the running device into `frame`; `Ok(false)`
+    /// when the set must be skipped (counted).
+    fn convert(&mut self, frame: &mut SourceFrame) -> Result<Option<bool>, Kinect2Error> {
+        let Some(running) = self.running.as_mut() else {
+            return Ok(None);
+        };
+        let Some(set) = running.device.wait_for_frames(WAIT_SLICE)? else {
+            return Ok(None);
+        };
+        running.last_frame = Instant::now();
+        let index = self.next_index;
+        self.next_index += 1;
+        let Some(depth) = set.depth() else {
+            self.stats.malformed += 1;
+            tracing::warn!(serial = self.serial, index, "frame set without depth; skipped");
+            return Ok(Some(false));
+        };
+        let color = if self.options.color { set.color() } else { None };
+        if self.options.color && color.is_none() {
+            self.stats.malformed += 1;
+            tracing::warn!(serial = self.serial, index, "frame set without colour; skipped");
+            return Ok(Some(false));
+        }
+        let status = depth.status() | color.map_or(0, |c| c.status());
+        if status != 0 {
+            self.stats.bad_status += 1;
+            tracing::debug!(serial = self.serial, index, status, "frame with non-zero status; skipped");
+            return Ok(Some(false));
+        }
+        let registered = match color {
+            Some(color) => {
+                running.registration.apply(
+                    &color,
+                    &depth,
+                    &mut self.undistorted,
+                    &mut self.registered,
+                    self.options.registration_filter,
+                )?;
+                Some(color.format())
+            }
+            None => {
+                running.registration.undistort(&depth, &mut self.undistorted)?;
+                None
+            }
+        };
+        let (width, height) = (self.info.width, self.info.height);
+        unmirror_depth(&self.undistorted, width, height, &mut frame.depth);
+        match registered {
+            Some(format) if format == FrameFormat::Bgrx || format == FrameFormat::Rgbx => {
+                let image = frame.color.get_or_insert_with(ColorImage::default);
+                unmirror_color(&self.registered, format, width, height, image);
+            }
+            Some(format) => {
+                return Err(Kinect2Error::UnexpectedFrame {
+                    serial: self.serial.clone(),
+                    what: format!("colour frame in format {format:?}, expected BGRX or RGBX"),
+                })
+            }
+            None => frame.color = None,
+        }
+        frame.index = index;
+        // Device clock: units of 0.125 ms.
+        frame.source_stamp_ns = u64::from(depth.timestamp()) * 125_000;
+        frame.capture_stamp_ns = slope_ipc_types::now_ns();
+        drop(set);
+        self.stats.frames += 1;
+        Ok(Some(true))
+    }
+}
+
+impl FrameSource for Kinect2Source {
+    fn info(&self) -> &SourceInfo {
+        &self.info
+    }
+
+    fn next_frame(&mut self, frame: &mut SourceFrame) -> Result<bool, SourceError> {
+        loop {
+            if self.stop.is_stopped() {
+                return Ok(false);
+            }
+            if self.running.is_none() {
+                if !self.reconnect() {
+                    return Ok(false);
+                }
+                continue;
+            }
+            match self.convert(frame) {
+                Ok(Some(true)) => return Ok(true),
+                Ok(Some(false)) => continue,
+                Ok(None) => {
+                    let silent = self
+                        .running
+                        .as_ref()
+                        .map_or(Duration::ZERO, |r| r.last_frame.elapsed());
+                    if silent >= self.options.frame_timeout {
+                        self.stats.lost += 1;
+                        tracing::warn!(
+                            serial = self.serial,
+                            silent = ?silent,
+                            lost = self.stats.lost,
+                            "no frames from the Kinect v2; reconnecting"
+                        );
+                        self.close();
+                    }
+                }
+                Err(err @ Kinect2Error::UnexpectedFrame { .. }) => {
+                    return Err(SourceError::Device(err.to_string()))
+                }
+                Err(err) => {
+                    // A failing wait or registration: treat like a lost device.
+                    self.stats.lost += 1;
+                    tracing::warn!(serial = self.serial, error = %err, "Kinect v2 failed; reconnecting");
+                    self.close();
+                }
+            }
+        }
+    }
+}
+
+impl Drop for Kinect2Source {
+    fn drop(&mut self) {
+        self.close();
+    }
+}
+
+/// Errors worth retrying while waiting for a device.
+fn is_retryable(err: &Kinect2Error) -> bool {
+    matches!(
+        err,
+        Kinect2Error::NoDevice { .. }
+            | Kinect2Error::SerialNotFound { .. }
+            | Kinect2Error::IndexOutOfRange { .. }
+            | Kinect2Error::Operation { .. }
+    )
+}
+
+/// Opens, configures and starts a device, and builds its registration from
+/// the parameters it reports once started.
+fn start_device(
+    context: &Context,
+    options: &Kinect2Options,
+    selector: &DeviceSelector,
+) -> Result<Running, Kinect2Error> {
+    let mut device = context.open(selector, options.pipeline, options.gpu_device)?;
+    device.set_depth_config(&options.depth)?;
+    let streams = if options.color {
+        Streams::DEPTH_AND_COLOR
+    } else {
+        Streams::DEPTH
+    };
+    device.start(streams)?;
+    match device.firmware_version() {
+        Ok(firmware) => tracing::debug!(serial = device.serial(), firmware, "device started"),
+        Err(err) => tracing::debug!(error = %err, "could not read the firmware version"),
+    }
+    // libfreenect2 reads the factory calibration during start.
+    let ir = device.ir_params()?;
+    let color = device.color_params()?;
+    let registration = Registration::new(&ir, &color)?;
+    Ok(Running {
+        device,
+        registration,
+        last_frame: Instant::now(),
+    })
+}

@@ -1,0 +1,10 @@
+//! The sensor side of slope: recordings on disk, depth-to-cloud projection,
+//! frame sources (recordings, the Kinect v2) and the zero-copy publishing
+//! path into iceoryx2 shared memory.
+
+pub mod ipc;
+pub mod projection;
+pub mod recording;
+pub mod source;
+pub mod publish;
+#[cfg(feature = "kinect2")] pub mod kinect2;

@@ -1,0 +1,416 @@
+//! `recording.toml`: the metadata types, parsing (text in, [`RecordingMeta`]
+//! out) and formatting. Pure: no file I/O here.
+
+use std::path::Path;
+
+use serde::Serialize;
+use slope_ipc_types::{Intrinsics, Mount};
+use toml::{Table, Value};
+
+use super::RecordingError;
+
+/// The value of `format` every recording carries.
+pub const FORMAT_NAME: &str = "slope-recording";
+/// The one `version` this crate reads and writes.
+pub const FORMAT_VERSION: i64 = 1;
+
+/// Everything `recording.toml` says (besides `format` and `version`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RecordingMeta {
+    /// Free text: "kinect2", "synthetic", "tum", ...; empty when absent.
+    pub sensor: String,
+    pub depth: DepthInfo,
+    pub mount: MountInfo,
+    pub truth: TruthInfo,
+}
+
+/// `[depth]`: image size, depth unit and pinhole intrinsics (pixel centres
+/// at integer coordinates).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct DepthInfo {
+    pub width: u32,
+    pub height: u32,
+    /// Metres per depth count.
+    pub unit_m: f64,
+    pub fx: f64,
+    pub fy: f64,
+    pub cx: f64,
+    pub cy: f64,
+}
+
+impl DepthInfo {
+    pub fn intrinsics(&self) -> Intrinsics {
+        Intrinsics {
+            fx: self.fx,
+            fy: self.fy,
+            cx: self.cx,
+            cy: self.cy,
+        }
+    }
+}
+
+/// `[mount]`: the camera's pose on the robot; each key optional.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
+pub struct MountInfo {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub height_m: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pitch_deg: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub roll_deg: Option<f64>,
+}
+
+impl MountInfo {
+    /// The IPC form: NaN for every unknown key.
+    pub fn to_mount(&self) -> Mount {
+        Mount {
+            height_m: self.height_m.unwrap_or(f64::NAN),
+            pitch_deg: self.pitch_deg.unwrap_or(f64::NAN),
+            roll_deg: self.roll_deg.unwrap_or(f64::NAN),
+        }
+    }
+
+    fn is_empty(&self) -> bool {
+        self.height_m.is_none() && self.pitch_deg.is_none() && self.roll_deg.is_none()
+    }
+}
+
+/// `[truth]`: ground truth for evaluation.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
+pub struct TruthInfo {
+    /// Unsigned angle between the inclined plane and the ground plane,
+    /// degrees, in [0, 90] (0 = no slope).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub slope_deg: Option<f64>,
+}
+
+impl TruthInfo {
+    fn is_empty(&self) -> bool {
+        self.slope_deg.is_none()
+    }
+}
+
+/// Parses the text of `recording.toml`; `path` is only used in errors.
+/// Unknown keys are ignored.
+pub(crate) fn parse_meta(text: &str, path: &Path) -> Result<RecordingMeta, RecordingError> {
+    let root: Table = toml::from_str(text).map_err(|source| RecordingError::Toml {
+        path: path.to_path_buf(),
+        source: Box::new(source),
+    })?;
+    let keys = Keys { path };
+
+    match root.get("format") {
+        None => return Err(keys.missing("format")),
+        Some(Value::String(found)) if found == FORMAT_NAME => {}
+        Some(Value::String(found)) => {
+            return Err(RecordingError::WrongFormat {
+                path: path.to_path_buf(),
+                found: found.clone(),
+            })
+        }
+        Some(other) => return Err(keys.invalid("format", wrong_type("a string", other))),
+    }
+    match root.get("version") {
+        None => return Err(keys.missing("version")),
+        Some(Value::Integer(FORMAT_VERSION)) => {}
+        Some(Value::Integer(found)) => {
+            return Err(RecordingError::UnknownVersion {
+                path: path.to_path_buf(),
+                found: *found,
+            })
+        }
+        Some(other) => return Err(keys.invalid("version", wrong_type("an integer", other))),
+    }
+    let sensor = match root.get("sensor") {
+        None => String::new(),
+        Some(Value::String(s)) => s.clone(),
+        Some(other) => return Err(keys.invalid("sensor", wrong_type("a string", other))),
+    };
+
+    let depth = keys
+        .table(&root, "depth")?
+        .ok_or_else(|| keys.missing("depth"))?;
+    let depth = DepthInfo {
+        width: keys.required_size(depth, "depth", "width")?,
+        height: keys.required_size(depth, "depth", "height")?,
+        unit_m: keys.required_float(depth, "depth", "unit_m")?,
+        fx: keys.required_float(depth, "depth", "fx")?,
+        fy: keys.required_float(depth, "depth", "fy")?,
+        cx: keys.required_float(depth, "depth", "cx")?,
+        cy: keys.required_float(depth, "depth", "cy")?,
+    };
+
+    let mount = match keys.table(&root, "mount")? {
+        None => MountInfo::default(),
+        Some(mount) => MountInfo {
+            height_m: keys.float(mount, "mount", "height_m")?,
+            pitch_deg: keys.float(mount, "mount", "pitch_deg")?,
+            roll_deg: keys.float(mount, "mount", "roll_deg")?,
+        },
+    };
+    let truth = match keys.table(&root, "truth")? {
+        None => TruthInfo::default(),
+        Some(truth) => TruthInfo {
+            slope_deg: keys.float(truth, "truth", "slope_deg")?,
+        },
+    };
+
+    let meta = RecordingMeta {
+        sensor,
+        depth,
+        mount,
+        truth,
+    };
+    validate_meta(&meta, path)?;
+    Ok(meta)
+}
+
+/// Checks the values a reader would reject: zero size, non-positive or
+/// non-finite `unit_m`/`fx`/`fy`, non-finite `cx`/`cy` or mount values, a
+/// truth outside [0, 90] degrees.
+pub(crate) fn validate_meta(meta: &RecordingMeta, path: &Path) -> Result<(), RecordingError> {
+    let keys = Keys { path };
+    let d = &meta.depth;
+    for (key, value) in [("depth.width", d.width), ("depth.height", d.height)] {
+        if value == 0 {
+            return Err(keys.invalid(key, "must be a positive integer, found 0".into()));
+        }
+    }
+    for (key, value) in [
+        ("depth.unit_m", d.unit_m),
+        ("depth.fx", d.fx),
+        ("depth.fy", d.fy),
+    ] {
+        if !(value.is_finite() && value > 0.0) {
+            return Err(keys.invalid(key, format!("must be a positive number, found {value}")));
+        }
+    }
+    let optional = [
+        ("mount.height_m", meta.mount.height_m),
+        ("mount.pitch_deg", meta.mount.pitch_deg),
+        ("mount.roll_deg", meta.mount.roll_deg),
+    ];
+    for (key, value) in [("depth.cx", Some(d.cx)), ("depth.cy", Some(d.cy))]
+        .into_iter()
+        .chain(optional)
+    {
+        if let Some(value) = value.filter(|v| !v.is_finite()) {
+            return Err(keys.invalid(key, format!("must be a finite number, found {value}")));
+        }
+    }
+    if let Some(slope) = meta.truth.slope_deg {
+        check_truth_deg(slope).map_err(|reason| keys.invalid("truth.slope_deg", reason))?;
+    }
+    Ok(())
+}
+
+/// A ground-truth slope must lie in [0, 90] degrees (the spec's unsigned
+/// angle between two planes' normals; 0 for flat ground).
+pub(crate) fn check_truth_deg(slope_deg: f64) -> Result<(), String> {
+    if (0.0..=90.0).contains(&slope_deg) {
+        Ok(())
+    } else {
+        Err(format!(
+            "a slope must lie in [0, 90] degrees, found {slope_deg}"
+        ))
+    }
+}
+
+/// The text of `recording.toml` for `meta`. Deterministic, and floats are
+/// written so that they parse back to the same bits.
+pub(crate) fn format_meta(meta: &RecordingMeta) -> Result<String, toml::ser::Error> {
+    #[derive(Serialize)]
+    struct File<'a> {
+        format: &'static str,
+        version: i64,
+        sensor: &'a str,
+        depth: &'a DepthInfo,
+        #[serde(skip_serializing_if = "MountInfo::is_empty")]
+        mount: &'a MountInfo,
+        #[serde(skip_serializing_if = "TruthInfo::is_empty")]
+        truth: &'a TruthInfo,
+    }
+    toml::to_string(&File {
+        format: FORMAT_NAME,
+        version: FORMAT_VERSION,
+        sensor: &meta.sensor,
+        depth: &meta.depth,
+        mount: &meta.mount,
+        truth: &meta.truth,
+    })
+}
+
+/// Key look-ups that name the file and the dotted key in their errors.
+struct Keys<'p> {
+    path: &'p Path,
+}
+
+impl Keys<'_> {
+    fn missing(&self, key: &str) -> RecordingError {
+        RecordingError::MissingKey {
+            path: self.path.to_path_buf(),
+            key: key.to_string(),
+        }
+    }
+
+    fn invalid(&self, key: &str, reason: String) -> RecordingError {
+        RecordingError::InvalidKey {
+            path: self.path.to_path_buf(),
+            key: key.to_string(),
+            reason,
+        }
+    }
+
+    fn table<'t>(&self, root: &'t Table, key: &str) -> Result<Option<&'t Table>, RecordingError> {
+        match root.get(key) {
+            None => Ok(None),
+            Some(Value::Table(table)) => Ok(Some(table)),
+            Some(other) => Err(self.invalid(key, wrong_type("a table", other))),
+        }
+    }
+
+    fn float(
+        &self,
+        table: &Table,
+        section: &str,
+        key: &str,
+    ) -> Result<Option<f64>, RecordingError> {
+        match table.get(key) {
+            None => Ok(None),
+            Some(Value::Float(v)) => Ok(Some(*v)),
+            // Integers are exact in f64 up to 2^53; every plausible value is far below.
+            Some(Value::Integer(v)) => Ok(Some(*v as f64)),
+            Some(other) => {
+                Err(self.invalid(&format!("{section}.{key}"), wrong_type("a number", other)))
+            }
+        }
+    }
+
+    fn required_float(
+        &self,
+        table: &Table,
+        section: &str,
+        key: &str,
+    ) -> Result<f64, RecordingError> {
+        self.float(table, section, key)?
+            .ok_or_else(|| self.missing(&format!("{section}.{key}")))
+    }
+
+    fn required_size(
+        &self,
+        table: &Table,
+        section: &str,
+        key: &str,
+    ) -> Result<u32, RecordingError> {
+        let dotted = format!("{section}.{key}");
+        match table.get(key) {
+            None => Err(self.missing(&dotted)),
+            Some(Value::Integer(v)) => u32::try_from(*v).map_err(|_| {
+                self.invalid(&dotted, format!("must be a positive integer, found {v}"))
+            }),
+            Some(other) => Err(self.invalid(&dotted, wrong_type("an integer", other))),
+        }
+    }
+}
+
+fn wrong_type(expected: &str, found: &Value) -> String {
+    format!("expected {expected}, found {} `{found}`", found.type_str())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample() -> RecordingMeta {
+        RecordingMeta {
+            sensor: "synthetic".into(),
+            depth: DepthInfo {
+                width: 512,
+                height: 424,
+                unit_m: 0.001,
+                fx: 365.32,
+                fy: 365.1 + 0.2,
+                cx: 254.69,
+                cy: 0.1 + 0.2,
+            },
+            mount: MountInfo {
+                height_m: Some(0.5),
+                pitch_deg: Some(-20.0),
+                roll_deg: None,
+            },
+            truth: TruthInfo {
+                slope_deg: Some(16.0),
+            },
+        }
+    }
+
+    #[test]
+    fn formatted_meta_parses_back_to_the_same_bits() {
+        let path = Path::new("recording.toml");
+        let mut meta = sample();
+        for tricky in [1e-300, 5e-324, 123456.789e10, 1.0 / 3.0] {
+            meta.depth.cx = tricky;
+            let text = format_meta(&meta).unwrap();
+            let back = parse_meta(&text, path).unwrap();
+            assert_eq!(back, meta, "{text}");
+            assert_eq!(back.depth.cx.to_bits(), tricky.to_bits());
+        }
+    }
+
+    #[test]
+    fn formatting_is_the_spec_layout() {
+        let text = format_meta(&sample()).unwrap();
+        let expected = "format = \"slope-recording\"\nversion = 1\nsensor = \"synthetic\"\n\n\
+                        [depth]\nwidth = 512\nheight = 424\nunit_m = 0.001\nfx = 365.32\n\
+                        fy = 365.3\ncx = 254.69\ncy = 0.30000000000000004\n\n\
+                        [mount]\nheight_m = 0.5\npitch_deg = -20.0\n\n\
+                        [truth]\nslope_deg = 16.0\n";
+        assert_eq!(text, expected);
+    }
+
+    #[test]
+    fn empty_mount_and_truth_are_left_out() {
+        let mut meta = sample();
+        meta.mount = MountInfo::default();
+        meta.truth = TruthInfo::default();
+        let text = format_meta(&meta).unwrap();
+        assert!(
+            !text.contains("[mount]") && !text.contains("[truth]"),
+            "{text}"
+        );
+        assert_eq!(parse_meta(&text, Path::new("r.toml")).unwrap(), meta);
+    }
+
+    #[test]
+    fn integers_are_accepted_where_floats_are_expected() {
+        let text = "format = \"slope-recording\"\nversion = 1\n[depth]\nwidth = 4\nheight = 3\n\
+                    unit_m = 1\nfx = 365\nfy = 366\ncx = 2\ncy = 1\n[mount]\npitch_deg = -20\n";
+        let meta = parse_meta(text, Path::new("r.toml")).unwrap();
+        assert_eq!(meta.sensor, "");
+        assert_eq!(meta.depth.fx, 365.0);
+        assert_eq!(meta.depth.unit_m, 1.0);
+        assert_eq!(meta.mount.pitch_deg, Some(-20.0));
+        assert_eq!(meta.mount.height_m, None);
+        let mount = meta.mount.to_mount();
+        assert!(mount.height_m.is_nan() && mount.roll_deg.is_nan());
+        assert_eq!(mount.pitch_deg, -20.0);
+    }
+
+    #[test]
+    fn truth_outside_zero_to_ninety_is_rejected() {
+        for bad in [-1.0, 90.5, f64::NAN] {
+            let mut meta = sample();
+            meta.truth.slope_deg = Some(bad);
+            let err = validate_meta(&meta, Path::new("r.toml")).unwrap_err();
+            assert!(
+                matches!(&err, RecordingError::InvalidKey { key, .. } if key == "truth.slope_deg"),
+                "{err}"
+            );
+        }
+        for good in [0.0, 16.0, 90.0] {
+            let mut meta = sample();
+            meta.truth.slope_deg = Some(good);
+            validate_meta(&meta, Path::new("r.toml")).unwrap();
+        }
+    }
+}

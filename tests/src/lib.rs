@@ -1,0 +1,196 @@
+//! Helpers for the multi-process tests: find the real slope binaries, give
+//! each test its own service prefix, spawn children that die with the test,
+//! and wait on deadlines instead of sleeping.
+
+use std::io::{BufRead, BufReader, Read};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::time::{Duration, Instant};
+
+use crossbeam_channel::Receiver;
+use nix::sys::signal::{kill, Signal};
+use nix::unistd::Pid;
+
+/// Environment variable naming the directory of the slope binaries.
+pub const BIN_DIR_ENV: &str = "SLOPE_BIN_DIR";
+
+/// The directory holding the slope binaries: `SLOPE_BIN_DIR`, else the
+/// cargo target directory this test executable was built into
+/// (`target/<profile>/deps/<test>` → `target/<profile>/`).
+pub fn bin_dir() -> PathBuf {
+    if let Some(dir) = std::env::var_os(BIN_DIR_ENV) {
+        return PathBuf::from(dir);
+    }
+    let exe = std::env::current_exe().expect("the test executable has a path");
+    let deps = exe.parent().expect("the test executable has a directory");
+    deps.parent()
+        .expect("the deps directory has a parent")
+        .to_path_buf()
+}
+
+/// Path of a slope binary; panics with a fix when it has not been built.
+pub fn binary(name: &str) -> PathBuf {
+    let path = bin_dir().join(name);
+    assert!(
+        path.is_file(),
+        "{} is missing: run `cargo build --workspace` (or `cargo test --workspace`, which builds \
+         it) first, or set {BIN_DIR_ENV}",
+        path.display()
+    );
+    path
+}
+
+/// The repository root.
+pub fn repo_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("tests/ lives in the repository")
+        .to_path_buf()
+}
+
+/// A bundled recording under tests/recordings/.
+pub fn recording(name: &str) -> PathBuf {
+    repo_root().join("tests/recordings").join(name)
+}
+
+/// The real Kinect frames in ../shared/data, when present.
+pub fn shared_data(name: &str) -> Option<PathBuf> {
+    let path = repo_root().join("../shared/data").join(name);
+    path.is_dir().then_some(path)
+}
+
+/// A service prefix no other test (or running stack) uses.
+pub fn unique_prefix(test: &str) -> String {
+    static COUNTER: AtomicU32 = AtomicU32::new(0);
+    format!(
+        "slope-test-{test}-{}-{}",
+        std::process::id(),
+        COUNTER.fetch_add(1, Ordering::SeqCst)
+    )
+}
+
+/// A child process with its output collected line by line on threads;
+/// killed when dropped.
+pub struct Proc {
+    pub name: String,
+    child: Child,
+    stdout: Receiver<String>,
+    stderr: Receiver<String>,
+    stderr_seen: Vec<String>,
+}
+
+fn pump(stream: impl Read + Send + 'static) -> Receiver<String> {
+    let (tx, rx) = crossbeam_channel::unbounded();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stream).lines() {
+            let Ok(line) = line else { break };
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    rx
+}
+
+impl Proc {
+    /// Starts binary `name` with `args`.
+    pub fn spawn<I, S>(name: &str, args: I) -> Proc
+    where
+        I: IntoIterator<Item = S>,
+        S: AsRef<std::ffi::OsStr>,
+    {
+        let mut command = Command::new(binary(name));
+        command.args(args).env_remove("RUST_LOG");
+        if let Some(filter) = std::env::var_os("SLOPE_TEST_LOG") {
+            command.env("RUST_LOG", filter);
+        }
+        let mut child = command
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap_or_else(|e| panic!("cannot start {name}: {e}"));
+        let stdout = pump(child.stdout.take().expect("stdout is piped"));
+        let stderr = pump(child.stderr.take().expect("stderr is piped"));
+        Proc {
+            name: name.to_string(),
+            child,
+            stdout,
+            stderr,
+            stderr_seen: Vec::new(),
+        }
+    }
+
+    pub fn pid(&self) -> u32 {
+        self.child.id()
+    }
+
+    /// Next stdout line, or None when the deadline passes or stdout closes.
+    pub fn stdout_line(&mut self, deadline: Instant) -> Option<String> {
+        recv_until(&self.stdout, deadline)
+    }
+
+    /// Reads stderr until a line contains `needle`; returns that line.
+    pub fn wait_stderr(&mut self, needle: &str, deadline: Instant) -> Option<String> {
+        while let Some(line) = recv_until(&self.stderr, deadline) {
+            self.stderr_seen.push(line.clone());
+            if line.contains(needle) {
+                return Some(line);
+            }
+        }
+        None
+    }
+
+    /// Every stderr line seen so far plus whatever is buffered now.
+    pub fn stderr_lines(&mut self) -> &[String] {
+        while let Ok(line) = self.stderr.try_recv() {
+            self.stderr_seen.push(line);
+        }
+        &self.stderr_seen
+    }
+
+    /// Waits for exit until the deadline; None if still running.
+    pub fn wait_exit(&mut self, deadline: Instant) -> Option<ExitStatus> {
+        loop {
+            if let Some(status) = self.child.try_wait().expect("try_wait works") {
+                return Some(status);
+            }
+            if Instant::now() >= deadline {
+                return None;
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+
+    pub fn signal(&self, signal: Signal) {
+        let pid = Pid::from_raw(i32::try_from(self.child.id()).expect("pid fits in i32"));
+        kill(pid, signal).unwrap_or_else(|e| panic!("cannot signal {}: {e}", self.name));
+    }
+
+    /// Everything the process wrote to stderr, for assertion messages.
+    pub fn diagnostics(&mut self) -> String {
+        let lines = self.stderr_lines().join("\n");
+        format!("{} stderr:\n{lines}", self.name)
+    }
+}
+
+impl Drop for Proc {
+    fn drop(&mut self) {
+        if let Ok(None) = self.child.try_wait() {
+            let _ = self.child.kill();
+            let _ = self.child.wait();
+        }
+    }
+}
+
+fn recv_until(rx: &Receiver<String>, deadline: Instant) -> Option<String> {
+    let timeout = deadline.saturating_duration_since(Instant::now());
+    // Timed out or the stream closed: either way there is no line.
+    rx.recv_timeout(timeout).ok()
+}
+
+/// A deadline `seconds` from now.
+pub fn deadline(seconds: f64) -> Instant {
+    Instant::now() + Duration::from_secs_f64(seconds)
+}

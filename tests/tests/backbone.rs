@@ -1,0 +1,311 @@
+//! The backbone across real processes: slope-replay -> slope-estimator ->
+//! an independent subscriber (slope-echo), each a separate process talking
+//! over iceoryx2 under a service prefix of its own.
+
+use std::collections::HashSet;
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use nix::sys::signal::Signal;
+use serde_json::Value;
+use slope_integration_tests::{deadline, recording, unique_prefix, Proc};
+use slope_sensor::recording::Recording;
+
+/// Starts an estimator and waits until it is subscribed.
+fn start_estimator(prefix: &str, extra: &[&str]) -> Proc {
+    let mut args = vec!["--service-prefix", prefix];
+    args.extend_from_slice(extra);
+    let mut estimator = Proc::spawn("slope-estimator", &args);
+    let ready = estimator.wait_stderr("estimator ready", deadline(20.0));
+    assert!(ready.is_some(), "{}", estimator.diagnostics());
+    estimator
+}
+
+/// Starts `slope-echo --json` and waits until it is subscribed.
+fn start_echo(prefix: &str, count: usize) -> Proc {
+    let count = count.to_string();
+    let mut echo = Proc::spawn(
+        "slope-echo",
+        [
+            "--json",
+            "--service-prefix",
+            prefix,
+            "--count",
+            &count,
+            "--timeout",
+            "120",
+        ],
+    );
+    let ready = echo.wait_stderr("subscribed to estimates", deadline(20.0));
+    assert!(ready.is_some(), "{}", echo.diagnostics());
+    echo
+}
+
+fn read_json_lines(echo: &mut Proc, count: usize, seconds: f64) -> Vec<Value> {
+    let until = deadline(seconds);
+    let mut lines = Vec::new();
+    while lines.len() < count {
+        let Some(line) = echo.stdout_line(until) else {
+            break;
+        };
+        let value: Value = serde_json::from_str(&line)
+            .unwrap_or_else(|e| panic!("slope-echo printed invalid JSON {line:?}: {e}"));
+        lines.push(value);
+    }
+    lines
+}
+
+fn assert_exits_zero_within(proc: &mut Proc, within: Duration) {
+    let started = Instant::now();
+    let status = proc.wait_exit(started + within);
+    let diagnostics = proc.diagnostics();
+    let status = status.unwrap_or_else(|| {
+        panic!(
+            "{} did not exit within {within:?}\n{diagnostics}",
+            proc.name
+        )
+    });
+    assert!(status.success(), "{} exited with {status}\n{diagnostics}", proc.name);
+}
+
+fn truth_of(dir: &Path) -> f64 {
+    let rec = Recording::open(dir).expect("bundled recording opens");
+    rec.meta().truth.slope_deg.expect("bundled recording has truth")
+}
+
+#[test]
+fn every_frame_gives_one_estimate_in_order_within_a_degree() {
+    let dir = recording("ramp16-clean");
+    let frames = Recording::open(&dir).expect("opens").frames().len();
+    let truth = truth_of(&dir);
+    let prefix = unique_prefix("every-frame");
+
+    let mut echo = start_echo(&prefix, frames);
+    let mut estimator = start_estimator(&prefix, &[]);
+    let mut replay = Proc::spawn(
+        "slope-replay",
+        [
+            dir.to_str().expect("utf-8 path"),
+            "--service-prefix",
+            &prefix,
+            "--rate",
+            "5",
+            "--wait-subscribers",
+            "1",
+            "--wait-timeout",
+            "20",
+        ],
+    );
+
+    let estimates = read_json_lines(&mut echo, frames, 60.0);
+    assert_eq!(
+        estimates.len(),
+        frames,
+        "expected one estimate per frame\n{}\n{}",
+        estimator.diagnostics(),
+        replay.diagnostics()
+    );
+    let indices: Vec<u64> = estimates
+        .iter()
+        .map(|e| e["frame"].as_u64().expect("frame is a number"))
+        .collect();
+    assert_eq!(indices, (0..frames as u64).collect::<Vec<_>>(), "frame order");
+    for e in &estimates {
+        for key in ["frame", "timestamp_ns", "status", "slope_deg", "std_deg", "latency_ms"] {
+            assert!(e.get(key).is_some(), "missing {key} in {e}");
+        }
+        assert_eq!(e["status"], "ok", "{e}");
+        let slope = e["slope_deg"].as_f64().expect("slope is a number");
+        assert!(
+            (slope - truth).abs() <= 1.0,
+            "slope {slope} vs truth {truth}: {e}"
+        );
+        let latency = e["latency_ms"].as_f64().expect("latency is a number");
+        assert!(latency > 0.0 && latency < 5_000.0, "latency {latency}");
+        assert_eq!(e["dropped_frames"], 0, "{e}");
+    }
+
+    assert_exits_zero_within(&mut echo, Duration::from_secs(5));
+    assert_exits_zero_within(&mut replay, Duration::from_secs(10));
+    estimator.signal(Signal::SIGTERM);
+    assert_exits_zero_within(&mut estimator, Duration::from_secs(1));
+}
+
+#[test]
+fn sigterm_ends_every_process_with_status_zero_within_a_second() {
+    let dir = recording("ramp16-clean");
+    let prefix = unique_prefix("sigterm");
+    let mut echo = Proc::spawn("slope-echo", ["--service-prefix", &prefix]);
+    assert!(
+        echo.wait_stderr("subscribed to estimates", deadline(20.0))
+            .is_some(),
+        "{}",
+        echo.diagnostics()
+    );
+    let mut estimator = start_estimator(&prefix, &[]);
+    let mut replay = Proc::spawn(
+        "slope-replay",
+        [
+            dir.to_str().expect("utf-8 path"),
+            "--service-prefix",
+            &prefix,
+            "--loop",
+            "--rate",
+            "10",
+        ],
+    );
+    // Wait until estimates flow through the whole chain.
+    let first = echo.stdout_line(deadline(30.0));
+    assert!(
+        first.is_some(),
+        "no estimate arrived\n{}\n{}",
+        estimator.diagnostics(),
+        replay.diagnostics()
+    );
+    for proc in [&mut replay, &mut estimator, &mut echo] {
+        proc.signal(Signal::SIGTERM);
+        assert_exits_zero_within(proc, Duration::from_secs(1));
+    }
+}
+
+#[test]
+fn sigint_stops_a_replay_waiting_for_subscribers() {
+    let dir = recording("ramp16-clean");
+    let prefix = unique_prefix("sigint-wait");
+    let mut replay = Proc::spawn(
+        "slope-replay",
+        [
+            dir.to_str().expect("utf-8 path"),
+            "--service-prefix",
+            &prefix,
+            "--wait-subscribers",
+            "3",
+        ],
+    );
+    assert!(
+        replay
+            .wait_stderr("waiting for subscribers", deadline(20.0))
+            .is_some(),
+        "{}",
+        replay.diagnostics()
+    );
+    replay.signal(Signal::SIGINT);
+    assert_exits_zero_within(&mut replay, Duration::from_secs(1));
+}
+
+/// Zero-copy, shown from the outside: the estimator logs the address of the
+/// cloud it runs the pipeline on (the slice it borrows from the received
+/// sample). That address must lie in a shared-memory file mapping of the
+/// estimator process, and the replay process must map the very same file:
+/// the estimator reads the bytes the publisher wrote, in place.
+#[test]
+fn estimator_reads_the_cloud_in_the_publishers_shared_memory() {
+    let dir = recording("ramp16-clean");
+    let prefix = unique_prefix("zero-copy");
+    let mut estimator = start_estimator(&prefix, &["-v"]);
+    let mut replay = Proc::spawn(
+        "slope-replay",
+        [
+            dir.to_str().expect("utf-8 path"),
+            "--service-prefix",
+            &prefix,
+            "--loop",
+            "--rate",
+            "10",
+        ],
+    );
+    let line = estimator
+        .wait_stderr("payload_addr=", deadline(30.0))
+        .unwrap_or_else(|| panic!("no payload address logged\n{}", replay.diagnostics()));
+    let hex = line
+        .split("payload_addr=")
+        .nth(1)
+        .and_then(|rest| rest.split_whitespace().next())
+        .expect("an address follows payload_addr=");
+    let addr = u64::from_str_radix(hex.trim_start_matches("0x"), 16).expect("hex address");
+
+    let estimator_maps = std::fs::read_to_string(format!("/proc/{}/maps", estimator.pid()))
+        .expect("estimator maps readable");
+    let mapping = estimator_maps
+        .lines()
+        .find(|l| {
+            let range = l.split_whitespace().next().unwrap_or("");
+            let mut ends = range.split('-');
+            let start = u64::from_str_radix(ends.next().unwrap_or(""), 16).unwrap_or(u64::MAX);
+            let end = u64::from_str_radix(ends.next().unwrap_or(""), 16).unwrap_or(0);
+            (start..end).contains(&addr)
+        })
+        .unwrap_or_else(|| panic!("{addr:#x} is in no mapping of the estimator"));
+    let file = mapping
+        .split_whitespace()
+        .nth(5)
+        .unwrap_or_else(|| panic!("{addr:#x} lies in an anonymous mapping: {mapping}"));
+    assert!(
+        file.starts_with("/dev/shm/"),
+        "the cloud is read from {file}, not from shared memory: {mapping}"
+    );
+
+    let replay_maps = std::fs::read_to_string(format!("/proc/{}/maps", replay.pid()))
+        .expect("replay maps readable");
+    let replay_files: HashSet<&str> = replay_maps
+        .lines()
+        .filter_map(|l| l.split_whitespace().nth(5))
+        .collect();
+    assert!(
+        replay_files.contains(file),
+        "the replay (publisher) does not map {file}; it maps {replay_files:?}"
+    );
+    for proc in [&mut replay, &mut estimator] {
+        proc.signal(Signal::SIGTERM);
+        assert_exits_zero_within(proc, Duration::from_secs(1));
+    }
+}
+
+#[test]
+fn a_missing_recording_is_a_clear_error_and_a_nonzero_exit() {
+    let prefix = unique_prefix("bad-recording");
+    let missing = std::env::temp_dir().join(format!("{prefix}-does-not-exist"));
+    let mut replay = Proc::spawn(
+        "slope-replay",
+        [missing.to_str().expect("utf-8 path"), "--service-prefix", &prefix],
+    );
+    let status = replay.wait_exit(deadline(10.0)).expect("replay exits");
+    assert!(!status.success(), "replay of a missing recording succeeded");
+    let stderr = replay.stderr_lines().join("\n");
+    assert!(stderr.contains("recording.toml"), "unclear error: {stderr}");
+    assert!(!stderr.contains("panicked"), "replay panicked: {stderr}");
+}
+
+#[test]
+fn demo_runs_the_chain_and_summarises_against_truth() {
+    let mut demo = Proc::spawn(
+        "slope-demo",
+        [
+            "--recording",
+            recording("ramp16-clean").to_str().expect("utf-8 path"),
+            "--rate",
+            "5",
+        ],
+    );
+    let until = deadline(90.0);
+    let mut lines = Vec::new();
+    while let Some(line) = demo.stdout_line(until) {
+        lines.push(line);
+    }
+    let status = demo.wait_exit(deadline(5.0)).expect("demo exits");
+    let diagnostics = demo.diagnostics();
+    assert!(status.success(), "demo failed: {status}\n{diagnostics}");
+    let summary = lines
+        .iter()
+        .find(|l| l.starts_with("summary:"))
+        .unwrap_or_else(|| panic!("no summary in {lines:#?}"));
+    let frame_lines = lines.iter().filter(|l| l.starts_with("frame")).count();
+    assert_eq!(frame_lines, 10, "one line per frame: {lines:#?}");
+    let error: f64 = summary
+        .split("|error| ")
+        .nth(1)
+        .and_then(|s| s.split('°').next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("no error in {summary}"));
+    assert!(error <= 1.0, "{summary}");
+}

@@ -1,0 +1,338 @@
+//! `slope-demo`: the whole chain on one machine. Starts `slope-estimator`
+//! and `slope-replay` as child processes on a recording (the bundled 16°
+//! ramp by default), subscribes to the estimates itself, prints each one
+//! beside the recording's ground truth, and ends with a summary.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::time::{Duration, Instant};
+
+use anyhow::{bail, Context};
+use clap::Parser;
+use nix::sys::signal::{kill, Signal};
+use nix::unistd::Pid;
+use slope_ipc_types::{EstimateStatus, ServiceNames, SlopeEstimate, SlopeMethod};
+use slope_sensor::ipc::{create_node, EstimateSubscriber};
+use slope_sensor::publish::StopFlag;
+use slope_sensor::recording::Recording;
+
+use crate::cli::{node_name, CommonArgs};
+use crate::estimator::method_arg;
+use crate::replay::positive_f64;
+
+/// Environment variable naming the directory that holds the slope binaries
+/// (default: the directory of the running executable).
+pub const BIN_DIR_ENV: &str = "SLOPE_BIN_DIR";
+
+/// The bundled recording the demo plays when given none.
+pub fn bundled_recording() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/recordings/ramp16")
+}
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "slope-demo",
+    version,
+    about = "Run replay -> estimator -> subscriber on a recording and compare with its ground truth",
+    long_about = "Starts slope-estimator and slope-replay as separate processes (talking over \
+iceoryx2 shared memory under a private service prefix), subscribes to the slope estimates, \
+prints each beside the recording's ground truth and ends with a summary. With no arguments it \
+plays the bundled 16-degree ramp recording.",
+    after_help = "Examples:
+  slope-demo                                   # bundled 16° ramp, paper method
+  slope-demo --method least-squares            # the baseline instead
+  slope-demo --recording ../shared/data/kinect2-stairs-front
+  slope-demo --rate 5                          # slower than the recorded 30 Hz"
+)]
+pub struct DemoArgs {
+    /// Recording to play (default: the bundled 16° ramp).
+    #[arg(long)]
+    pub recording: Option<PathBuf>,
+
+    /// Estimator method: paper, least-squares or tls.
+    #[arg(long, value_parser = method_arg, default_value = "paper")]
+    pub method: SlopeMethod,
+
+    /// Replay at this many frames per second instead of the recorded rate.
+    #[arg(long, value_parser = positive_f64)]
+    pub rate: Option<f64>,
+
+    /// Give up if the chain produces nothing for this many seconds.
+    #[arg(long, default_value_t = 20.0, value_parser = positive_f64)]
+    pub stall_timeout: f64,
+
+    #[command(flatten)]
+    pub common: CommonArgs,
+}
+
+/// Finds a sibling slope binary.
+pub fn binary_path(name: &str) -> anyhow::Result<PathBuf> {
+    let dir = match std::env::var_os(BIN_DIR_ENV) {
+        Some(dir) => PathBuf::from(dir),
+        None => std::env::current_exe()
+            .context("cannot locate the running executable")?
+            .parent()
+            .map(Path::to_path_buf)
+            .context("the running executable has no directory")?,
+    };
+    let path = dir.join(name);
+    if !path.is_file() {
+        bail!(
+            "cannot find {} (build the workspace with `cargo build`, or set {BIN_DIR_ENV})",
+            path.display()
+        );
+    }
+    Ok(path)
+}
+
+/// A child process that is terminated when dropped.
+struct ChildGuard {
+    name: &'static str,
+    child: Child,
+}
+
+impl ChildGuard {
+    fn spawn(name: &'static str, command: &mut Command) -> anyhow::Result<Self> {
+        let child = command
+            .stdin(Stdio::null())
+            .spawn()
+            .with_context(|| format!("cannot start {name}"))?;
+        Ok(Self { name, child })
+    }
+
+    fn try_wait(&mut self) -> anyhow::Result<Option<ExitStatus>> {
+        self.child
+            .try_wait()
+            .with_context(|| format!("cannot query {}", self.name))
+    }
+
+    /// SIGTERM, then wait up to `grace`; SIGKILL after that.
+    fn terminate(&mut self, grace: Duration) -> anyhow::Result<ExitStatus> {
+        if let Some(status) = self.try_wait()? {
+            return Ok(status);
+        }
+        let pid = Pid::from_raw(i32::try_from(self.child.id()).context("pid out of range")?);
+        // The child may exit between the check and the signal; ESRCH is fine.
+        let _ = kill(pid, Signal::SIGTERM);
+        let deadline = Instant::now() + grace;
+        while Instant::now() < deadline {
+            if let Some(status) = self.try_wait()? {
+                return Ok(status);
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        tracing::warn!(process = self.name, "did not stop on SIGTERM; killing it");
+        self.child.kill().ok();
+        self.child
+            .wait()
+            .with_context(|| format!("cannot wait for {}", self.name))
+    }
+}
+
+impl Drop for ChildGuard {
+    fn drop(&mut self) {
+        if let Ok(None) = self.child.try_wait() {
+            self.child.kill().ok();
+            self.child.wait().ok();
+        }
+    }
+}
+
+/// What the demo saw.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DemoSummary {
+    pub frames_published: usize,
+    pub estimates: usize,
+    pub ok: usize,
+    pub median_slope_deg: Option<f64>,
+    pub truth_deg: Option<f64>,
+    pub abs_error_deg: Option<f64>,
+    pub median_latency_ms: Option<f64>,
+    pub dropped: u64,
+}
+
+pub fn median(values: &mut [f64]) -> Option<f64> {
+    if values.is_empty() {
+        return None;
+    }
+    values.sort_by(f64::total_cmp);
+    let mid = values.len() / 2;
+    Some(if values.len() % 2 == 0 {
+        (values[mid - 1] + values[mid]) / 2.0
+    } else {
+        values[mid]
+    })
+}
+
+fn line_for(estimate: &SlopeEstimate, truth: Option<f64>) -> String {
+    let head = format!("frame {:>5}", estimate.frame_index);
+    let truth_text = truth.map_or("truth   -   ".to_string(), |t| format!("truth {t:6.2}°"));
+    let latency = format!("latency {:6.1} ms", estimate.latency_ms());
+    if estimate.status() == EstimateStatus::Ok {
+        let error = truth.map_or(String::new(), |t| {
+            format!("  error {:5.2}°", (estimate.slope_deg.abs() - t).abs())
+        });
+        format!(
+            "{head}  slope {:+7.2}° ± {:4.2}°  {truth_text}{error}  {latency}",
+            estimate.slope_deg, estimate.slope_std_deg
+        )
+    } else {
+        format!(
+            "{head}  {:<22} {truth_text}  {latency}",
+            estimate.status().name()
+        )
+    }
+}
+
+pub fn run(args: &DemoArgs, stop: &StopFlag) -> anyhow::Result<DemoSummary> {
+    let recording_dir = args.recording.clone().unwrap_or_else(bundled_recording);
+    let recording = Recording::open(&recording_dir)
+        .with_context(|| format!("cannot open the demo recording {}", recording_dir.display()))?;
+    let truths: HashMap<u64, Option<f64>> = recording
+        .frames()
+        .iter()
+        .map(|f| (f.index, recording.truth_deg(f)))
+        .collect();
+    let frame_count = recording.frames().len();
+    let last_index = recording.frames().last().map(|f| f.index);
+    let estimator_bin = binary_path("slope-estimator")?;
+    let replay_bin = binary_path("slope-replay")?;
+
+    let prefix = format!("{}-demo-{}", args.common.service_prefix, std::process::id());
+    let names = ServiceNames::new(prefix.clone());
+    let node = create_node(&node_name("slope-demo"))?;
+    let subscriber = EstimateSubscriber::create(&node, &names)?;
+    let child_log = if args.common.verbose > 0 { "-v" } else { "-q" };
+
+    println!(
+        "slope-demo: {} ({frame_count} frames) -> slope-replay -> slope-estimator --method {} -> here",
+        recording_dir.display(),
+        args.method.name()
+    );
+    let mut estimator = ChildGuard::spawn(
+        "slope-estimator",
+        Command::new(&estimator_bin)
+            .args(["--method", args.method.name(), "--service-prefix", &prefix])
+            .arg(child_log),
+    )?;
+    let mut replay_cmd = Command::new(&replay_bin);
+    replay_cmd
+        .arg(&recording_dir)
+        .args(["--service-prefix", &prefix, "--wait-subscribers", "1"])
+        .args(["--wait-timeout", "30"])
+        .arg(child_log);
+    if let Some(rate) = args.rate {
+        replay_cmd.args(["--rate", &rate.to_string()]);
+    }
+    let mut replay = ChildGuard::spawn("slope-replay", &mut replay_cmd)?;
+
+    let stall = Duration::from_secs_f64(args.stall_timeout);
+    let mut last_activity = Instant::now();
+    let mut replay_done: Option<Instant> = None;
+    let mut slopes = Vec::new();
+    let mut latencies = Vec::new();
+    let mut errors = Vec::new();
+    let mut estimates = 0usize;
+    let mut dropped = 0u64;
+    let mut finished = false;
+    while !finished && !stop.is_stopped() {
+        subscriber.listener().wait(Duration::from_millis(100))?;
+        while let Some(estimate) = subscriber.receive()? {
+            last_activity = Instant::now();
+            estimates += 1;
+            dropped = estimate.dropped_frames;
+            let truth = truths.get(&estimate.frame_index).copied().flatten();
+            println!("{}", line_for(&estimate, truth));
+            latencies.push(estimate.latency_ms());
+            if estimate.status() == EstimateStatus::Ok {
+                slopes.push(estimate.slope_deg);
+                if let Some(t) = truth {
+                    errors.push((estimate.slope_deg.abs() - t).abs());
+                }
+            }
+            if Some(estimate.frame_index) == last_index {
+                finished = true;
+            }
+        }
+        if replay_done.is_none() {
+            if let Some(status) = replay.try_wait()? {
+                if !status.success() {
+                    bail!("slope-replay failed ({status})");
+                }
+                replay_done = Some(Instant::now());
+            }
+        }
+        if let Some(status) = estimator.try_wait()? {
+            bail!("slope-estimator exited early ({status})");
+        }
+        // After the replay ends, the last frame may have been superseded;
+        // a quiet second means nothing more is coming.
+        if replay_done.is_some_and(|t| t.elapsed() > Duration::from_secs(1))
+            && last_activity.elapsed() > Duration::from_secs(1)
+        {
+            finished = true;
+        }
+        if last_activity.elapsed() > stall {
+            bail!(
+                "no estimate for {:.0} s; is the estimator keeping up? (try --rate 5 or -v)",
+                stall.as_secs_f64()
+            );
+        }
+    }
+    replay.terminate(Duration::from_secs(2))?;
+    let status = estimator.terminate(Duration::from_secs(3))?;
+    if !status.success() && !stop.is_stopped() {
+        bail!("slope-estimator did not exit cleanly ({status})");
+    }
+
+    let ok = slopes.len();
+    let truth_deg = recording.meta().truth.slope_deg;
+    let median_slope_deg = median(&mut slopes);
+    let summary = DemoSummary {
+        frames_published: frame_count,
+        estimates,
+        ok,
+        median_slope_deg,
+        truth_deg,
+        abs_error_deg: match (median_slope_deg, truth_deg) {
+            (Some(m), Some(t)) => Some((m.abs() - t).abs()),
+            _ => median(&mut errors),
+        },
+        median_latency_ms: median(&mut latencies),
+        dropped,
+    };
+    print_summary(&summary);
+    if estimates == 0 {
+        bail!("the estimator published no estimate");
+    }
+    Ok(summary)
+}
+
+fn print_summary(s: &DemoSummary) {
+    let deg = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.2}°"));
+    println!(
+        "summary: {} frames replayed, {} estimates ({} ok, {} dropped), median slope {}, truth {}, |error| {}, median latency {}",
+        s.frames_published,
+        s.estimates,
+        s.ok,
+        s.dropped,
+        deg(s.median_slope_deg),
+        deg(s.truth_deg),
+        deg(s.abs_error_deg),
+        s.median_latency_ms
+            .map_or("-".to_string(), |v| format!("{v:.1} ms")),
+    );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn median_of_odd_and_even_counts() {
+        assert_eq!(median(&mut []), None);
+        assert_eq!(median(&mut [3.0, 1.0, 2.0]), Some(2.0));
+        assert_eq!(median(&mut [4.0, 1.0, 3.0, 2.0]), Some(2.5));
+    }
+}

@@ -1,0 +1,220 @@
+//! `slope-estimator`: subscribes to clouds, estimates the slope of the newest
+//! one, publishes a `SlopeEstimate` per processed frame.
+//!
+//! It sleeps in an iceoryx2 `WaitSet` until the cloud event fires (no busy
+//! polling), then takes the newest cloud waiting and drops older ones, so it
+//! never falls behind the camera. The cloud is read in place from the
+//! publisher's shared memory: the pipeline borrows the sample's slice.
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use anyhow::Context;
+use clap::Parser;
+use iceoryx2::prelude::*;
+use iceoryx2::waitset::WaitSetRunResult;
+use slope_ipc_types::{SlopeEstimate, SlopeMethod};
+use slope_pipeline::{parse_method, CloudView, Estimator, EstimatorConfig};
+use slope_sensor::ipc::{create_node, CloudSubscriber, EstimatePublisher};
+use slope_sensor::publish::StopFlag;
+
+use crate::cli::{node_name, CommonArgs};
+
+/// How often the loop wakes without data to look at the stop flag.
+const STOP_CHECK_INTERVAL: Duration = Duration::from_millis(100);
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "slope-estimator",
+    version,
+    about = "Estimate the road slope from the cloud topic and publish it on the estimate topic",
+    long_about = "Subscribes to organised point clouds (from slope-capture or slope-replay), runs the \
+estimator on the newest frame and publishes one SlopeEstimate per processed frame. Frames that \
+arrive while a frame is being processed are superseded by the newest one and counted as dropped. \
+Stops cleanly on SIGINT or SIGTERM.",
+    after_help = "Examples:
+  slope-estimator                              # the paper's method, default parameters
+  slope-estimator --method tls                 # total-least-squares baseline
+  slope-estimator --config estimator.toml      # parameters from a TOML file
+  slope-estimator --service-prefix robot2 -v   # another stack, debug logs"
+)]
+pub struct EstimatorArgs {
+    /// Fit used for the planes: paper (normals, cosine k-means, cumulative
+    /// averaging), least-squares, or tls. Overrides the config file.
+    #[arg(long, value_parser = method_arg)]
+    pub method: Option<SlopeMethod>,
+
+    /// TOML file with estimator parameters (see the pipeline README);
+    /// missing keys keep the paper's defaults.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+
+    /// Stop after publishing this many estimates.
+    #[arg(long)]
+    pub max_frames: Option<u64>,
+
+    #[command(flatten)]
+    pub common: CommonArgs,
+}
+
+pub fn method_arg(text: &str) -> Result<SlopeMethod, String> {
+    parse_method(text)
+        .ok_or_else(|| format!("unknown method '{text}': expected paper, least-squares or tls"))
+}
+
+/// Reads the configuration file (if any) and applies command-line overrides.
+pub fn load_config(
+    path: Option<&PathBuf>,
+    method: Option<SlopeMethod>,
+) -> anyhow::Result<EstimatorConfig> {
+    let mut config = match path {
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("cannot read estimator config {}", path.display()))?;
+            EstimatorConfig::from_toml_str(&text)
+                .with_context(|| format!("invalid estimator config {}", path.display()))?
+        }
+        None => EstimatorConfig::default(),
+    };
+    if let Some(method) = method {
+        config.method = method;
+    }
+    config.validate().context("invalid estimator config")?;
+    Ok(config)
+}
+
+/// What the estimator did.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct EstimatorStats {
+    pub processed: u64,
+    pub dropped: u64,
+}
+
+pub fn run(args: &EstimatorArgs, stop: &StopFlag) -> anyhow::Result<EstimatorStats> {
+    let config = load_config(args.config.as_ref(), args.method)?;
+    let names = args.common.service_names();
+    let node = create_node(&node_name("slope-estimator"))?;
+    let subscriber = CloudSubscriber::create(&node, &names)?;
+    let publisher = EstimatePublisher::create(&node, &names)?;
+    let waitset = WaitSetBuilder::new()
+        .signal_handling_mode(SignalHandlingMode::Disabled)
+        .create::<ipc::Service>()
+        .map_err(|e| anyhow::anyhow!("failed to create the wait set: {e:?}"))?;
+    let cloud_guard = waitset
+        .attach_notification(subscriber.listener().listener())
+        .map_err(|e| anyhow::anyhow!("failed to attach the cloud listener: {e:?}"))?;
+    let _stop_check = waitset
+        .attach_interval(STOP_CHECK_INTERVAL)
+        .map_err(|e| anyhow::anyhow!("failed to attach the stop-check interval: {e:?}"))?;
+
+    tracing::info!(
+        method = config.method.name(),
+        clouds = subscriber.service_name(),
+        estimates = %names.estimate(),
+        "estimator ready"
+    );
+    let mut worker = Worker {
+        estimator: Estimator::new(config),
+        subscriber: &subscriber,
+        publisher: &publisher,
+        stats: EstimatorStats::default(),
+        last_index: None,
+        max_frames: args.max_frames,
+    };
+    let mut failure: Option<anyhow::Error> = None;
+    let mut on_event = |id: WaitSetAttachmentId<ipc::Service>| {
+        if id.has_event_from(&cloud_guard) {
+            if let Err(err) = worker.on_cloud_event() {
+                failure = Some(err);
+                return CallbackProgression::Stop;
+            }
+        }
+        if stop.is_stopped() || worker.done() {
+            CallbackProgression::Stop
+        } else {
+            CallbackProgression::Continue
+        }
+    };
+    // A signal may interrupt the wait itself; the stop flag decides.
+    loop {
+        match waitset.wait_and_process(&mut on_event) {
+            Ok(WaitSetRunResult::StopRequest) => break,
+            Ok(_) if stop.is_stopped() => break,
+            Ok(_) => continue,
+            Err(err) => return Err(anyhow::anyhow!("waiting for clouds failed: {err:?}")),
+        }
+    }
+    if let Some(err) = failure {
+        return Err(err);
+    }
+    tracing::info!(
+        processed = worker.stats.processed,
+        dropped = worker.stats.dropped,
+        "estimator stopped"
+    );
+    Ok(worker.stats.clone())
+}
+
+struct Worker<'a> {
+    estimator: Estimator,
+    subscriber: &'a CloudSubscriber,
+    publisher: &'a EstimatePublisher,
+    stats: EstimatorStats,
+    last_index: Option<u64>,
+    max_frames: Option<u64>,
+}
+
+impl Worker<'_> {
+    fn done(&self) -> bool {
+        self.max_frames
+            .is_some_and(|max| self.stats.processed >= max)
+    }
+
+    fn on_cloud_event(&mut self) -> anyhow::Result<()> {
+        self.subscriber.listener().drain()?;
+        let (sample, skipped) = self.subscriber.receive_newest()?;
+        let Some(sample) = sample else {
+            return Ok(());
+        };
+        let header = *sample.header();
+        let points = sample.points();
+        // Frames the queue overwrote before we saw them show up as gaps.
+        let gap = match self.last_index {
+            Some(last) if header.frame_index > last => header.frame_index - last - 1,
+            _ => 0,
+        };
+        let missed = gap.max(skipped);
+        if missed > 0 {
+            tracing::debug!(frame = header.frame_index, missed, "dropped stale clouds");
+        }
+        self.stats.dropped += missed;
+        self.last_index = Some(header.frame_index);
+        tracing::debug!(
+            frame = header.frame_index,
+            points = points.len(),
+            payload_addr = format_args!("{:#x}", points.as_ptr() as usize),
+            "processing cloud in place"
+        );
+        let view = CloudView::from_header(&header, points);
+        let estimate = self.estimator.estimate(&view);
+        let mut message = SlopeEstimate {
+            frame_index: header.frame_index,
+            capture_stamp_ns: header.capture_stamp_ns,
+            source_stamp_ns: header.source_stamp_ns,
+            dropped_frames: self.stats.dropped,
+            ..SlopeEstimate::default()
+        };
+        estimate.write_message(&mut message);
+        drop(sample);
+        let sent = self.publisher.publish(&message)?;
+        self.stats.processed += 1;
+        tracing::debug!(
+            frame = sent.frame_index,
+            status = sent.status().name(),
+            slope_deg = sent.slope_deg,
+            ms = estimate.timings.total_ms,
+            "published estimate"
+        );
+        Ok(())
+    }
+}

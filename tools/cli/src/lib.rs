@@ -1,0 +1,12 @@
+//! The slope command-line programs. Each binary in `src/bin/` is a thin
+//! `main` (parse, set up logging, call `run`); the logic lives in one module
+//! per program here, so that it can be read and tested without a process.
+
+#[cfg(feature = "kinect2")]
+pub mod capture;
+pub mod cli;
+pub mod demo;
+pub mod echo;
+pub mod estimator;
+pub mod record;
+pub mod replay;

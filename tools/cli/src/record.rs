@@ -1,0 +1,568 @@
+//! `slope-record OUT_DIR`: writes a recording (see the recording format)
+//! that `slope-replay` can play back later, either from the cloud topic of
+//! whatever source is running (`slope-capture`, `slope-replay`, ...) or
+//! straight from the Kinect v2 (`--source kinect`, with the `kinect2`
+//! feature).
+//!
+//! From the topic, each cloud becomes a depth image again: `depth =
+//! round(z_m / 0.001)` (0 where the point is invalid), colour from `rgb` when
+//! the header says so, intrinsics and mount from the header. Since a cloud is
+//! projected from whole-millimetre depth, this gives back the source's depth
+//! to the millimetre.
+
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use anyhow::Context;
+use clap::{Parser, ValueEnum};
+use slope_ipc_types::{CloudHeader, CloudPoint, CloudSource, Mount};
+use slope_sensor::ipc::{create_node, CloudSubscriber};
+use slope_sensor::publish::StopFlag;
+use slope_sensor::recording::{
+    ColorImage, DepthImage, DepthInfo, MountInfo, PngCompression, RecordingMeta, RecordingWriter,
+    TruthInfo,
+};
+use slope_sensor::source::{FrameSource, SourceFrame, SourceInfo};
+
+use crate::cli::{node_name, CommonArgs};
+use crate::replay::positive_f64;
+
+/// Metres per depth count of recordings written from the topic.
+pub const TOPIC_DEPTH_UNIT_M: f64 = 0.001;
+
+/// Where frames come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum RecordSource {
+    /// The cloud topic of any running source (slope-capture, slope-replay).
+    Topic,
+    /// The Kinect v2 directly (needs a build with `--features kinect2`).
+    Kinect,
+}
+
+/// PNG compression of the written images.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Compression {
+    Fast,
+    Balanced,
+    High,
+}
+
+impl From<Compression> for PngCompression {
+    fn from(value: Compression) -> Self {
+        match value {
+            Compression::Fast => PngCompression::Fast,
+            Compression::Balanced => PngCompression::Balanced,
+            Compression::High => PngCompression::High,
+        }
+    }
+}
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "slope-record",
+    version,
+    about = "Record depth (and colour) frames into a recording that slope-replay can play",
+    long_about = "Writes OUT_DIR in the recording format (recording.toml, frames.csv, depth/*.png, \
+color/*.png) from the cloud topic of a running source, or straight from the Kinect v2. Every row \
+is flushed as soon as its images are written, so a recording cut short stays readable. Stops at \
+--max-frames, --duration-s, when the topic goes quiet for --idle-timeout-s, or on Ctrl-C.",
+    after_help = "Examples:
+  slope-record scene1                                  # from the running slope-capture, until Ctrl-C
+  slope-record scene1 --max-frames 300                 # ten seconds of a 30 Hz camera
+  slope-record scene1 --source kinect --mount-pitch-deg -20 --mount-height-m 0.5
+  slope-replay scene1                                  # ... and play it back later
+  slope-record copy --idle-timeout-s 2 & slope-replay REC --wait-subscribers 1"
+)]
+pub struct RecordArgs {
+    /// The recording directory to create (must not exist, or be empty).
+    pub out_dir: PathBuf,
+
+    /// Where frames come from.
+    #[arg(long, value_enum, default_value_t = RecordSource::Topic)]
+    pub source: RecordSource,
+
+    /// Stop after this many frames.
+    #[arg(long)]
+    pub max_frames: Option<u64>,
+
+    /// Stop after this many seconds from the first frame.
+    #[arg(long, value_parser = positive_f64)]
+    pub duration_s: Option<f64>,
+
+    /// Topic: give up (non-zero exit) when no cloud arrives within this many
+    /// seconds; waits forever when not given.
+    #[arg(long, value_parser = positive_f64)]
+    pub wait_timeout_s: Option<f64>,
+
+    /// Topic: finish when no cloud has arrived for this many seconds after
+    /// the first one (e.g. the replay ended).
+    #[arg(long, value_parser = positive_f64)]
+    pub idle_timeout_s: Option<f64>,
+
+    /// Camera height above the ground, metres, for recording.toml's
+    /// [mount] (topic: overrides the header's).
+    #[arg(long)]
+    pub mount_height_m: Option<f64>,
+
+    /// Camera pitch, degrees; negative looks down.
+    #[arg(long, allow_hyphen_values = true)]
+    pub mount_pitch_deg: Option<f64>,
+
+    /// Camera roll about the optical axis, degrees.
+    #[arg(long, allow_hyphen_values = true)]
+    pub mount_roll_deg: Option<f64>,
+
+    /// PNG compression: fast for a busy robot, high for archiving.
+    #[arg(long, value_enum, default_value_t = Compression::Fast)]
+    pub compression: Compression,
+
+    /// Kinect: serial of the device (default: the first).
+    #[arg(long)]
+    pub serial: Option<String>,
+
+    /// Kinect: depth pipeline (default, cpu, cl, clkde, cuda, cudakde, gl).
+    #[arg(long)]
+    pub pipeline: Option<String>,
+
+    /// Kinect: record depth only.
+    #[arg(long)]
+    pub depth_only: bool,
+
+    #[command(flatten)]
+    pub common: CommonArgs,
+}
+
+/// When to stop recording.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct RecordLimits {
+    pub max_frames: Option<u64>,
+    pub duration: Option<Duration>,
+    pub wait_timeout: Option<Duration>,
+    pub idle_timeout: Option<Duration>,
+}
+
+impl RecordLimits {
+    fn from_args(args: &RecordArgs) -> Self {
+        Self {
+            max_frames: args.max_frames,
+            duration: args.duration_s.map(Duration::from_secs_f64),
+            wait_timeout: args.wait_timeout_s.map(Duration::from_secs_f64),
+            idle_timeout: args.idle_timeout_s.map(Duration::from_secs_f64),
+        }
+    }
+}
+
+/// What a recording run did.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct RecordStats {
+    pub written: u64,
+    /// Clouds the topic had but the recorder never saw (gaps in frame_index).
+    pub missed: u64,
+    /// Clouds skipped because their size or layout differed from the first.
+    pub skipped: u64,
+    /// True when a signal ended the recording.
+    pub stopped: bool,
+}
+
+/// A mount with the command line's values over `base`.
+fn override_mount(base: Mount, args: &RecordArgs) -> Mount {
+    Mount {
+        height_m: args.mount_height_m.unwrap_or(base.height_m),
+        pitch_deg: args.mount_pitch_deg.unwrap_or(base.pitch_deg),
+        roll_deg: args.mount_roll_deg.unwrap_or(base.roll_deg),
+    }
+}
+
+fn mount_info(mount: &Mount) -> MountInfo {
+    let known = |v: f64| v.is_finite().then_some(v);
+    MountInfo {
+        height_m: known(mount.height_m),
+        pitch_deg: known(mount.pitch_deg),
+        roll_deg: known(mount.roll_deg),
+    }
+}
+
+/// The recording.toml of a stream.
+pub fn meta_for(info: &SourceInfo, sensor: &str) -> RecordingMeta {
+    RecordingMeta {
+        sensor: sensor.to_string(),
+        depth: DepthInfo {
+            width: info.width,
+            height: info.height,
+            unit_m: info.unit_m,
+            fx: info.intrinsics.fx,
+            fy: info.intrinsics.fy,
+            cx: info.intrinsics.cx,
+            cy: info.intrinsics.cy,
+        },
+        mount: mount_info(&info.mount),
+        truth: TruthInfo::default(),
+    }
+}
+
+/// A cloud's depth in whole counts of `unit_m`: `round(z_m / unit_m)`,
+/// 0 for an invalid point, saturating at the u16 range.
+#[inline]
+pub fn depth_count(point: &CloudPoint, unit_m: f64) -> u16 {
+    if !point.is_valid() || point.z_m <= 0.0 {
+        return 0;
+    }
+    let count = (f64::from(point.z_m) / unit_m).round();
+    // `as` saturates; the value is finite and positive here.
+    count as u16
+}
+
+/// Rebuilds the depth (and colour) images of a received cloud.
+pub fn cloud_to_images(
+    header: &CloudHeader,
+    points: &[CloudPoint],
+    unit_m: f64,
+    depth: &mut DepthImage,
+    color: &mut Option<ColorImage>,
+) {
+    depth.width = header.width;
+    depth.height = header.height;
+    depth.data.clear();
+    depth.data.extend(points.iter().map(|p| depth_count(p, unit_m)));
+    if header.has_color != 0 {
+        let image = color.get_or_insert_with(ColorImage::default);
+        image.width = header.width;
+        image.height = header.height;
+        image.data.clear();
+        image.data.extend(points.iter().map(|p| {
+            let [_, r, g, b] = p.rgb.to_be_bytes();
+            [r, g, b]
+        }));
+    } else {
+        *color = None;
+    }
+}
+
+/// Keeps recording timestamps non-decreasing (a device clock may wrap).
+struct Timeline {
+    first_ns: Option<u64>,
+    last_ns: u64,
+}
+
+impl Timeline {
+    fn new() -> Self {
+        Self {
+            first_ns: None,
+            last_ns: 0,
+        }
+    }
+
+    fn stamp(&mut self, source_stamp_ns: u64) -> u64 {
+        let first = *self.first_ns.get_or_insert(source_stamp_ns);
+        let relative = source_stamp_ns.saturating_sub(first);
+        if relative < self.last_ns {
+            tracing::warn!(
+                relative_ns = relative,
+                previous_ns = self.last_ns,
+                "source clock went backwards; keeping timestamps non-decreasing"
+            );
+        }
+        self.last_ns = self.last_ns.max(relative);
+        self.last_ns
+    }
+}
+
+/// Records any frame source (the Kinect, a recording) until it ends, a
+/// limit is reached or `stop` is set.
+pub fn record_source(
+    source: &mut dyn FrameSource,
+    writer: &mut RecordingWriter,
+    limits: &RecordLimits,
+    stop: &StopFlag,
+) -> anyhow::Result<RecordStats> {
+    let mut stats = RecordStats::default();
+    let mut frame = SourceFrame::default();
+    let mut timeline = Timeline::new();
+    let mut started: Option<Instant> = None;
+    loop {
+        if stop.is_stopped() {
+            stats.stopped = true;
+            break;
+        }
+        if limits.max_frames.is_some_and(|max| stats.written >= max)
+            || limits
+                .duration
+                .zip(started)
+                .is_some_and(|(duration, start)| start.elapsed() >= duration)
+        {
+            break;
+        }
+        if !source.next_frame(&mut frame).context("the source failed")? {
+            stats.stopped = stop.is_stopped();
+            break;
+        }
+        started.get_or_insert_with(Instant::now);
+        let timestamp_ns = timeline.stamp(frame.source_stamp_ns);
+        writer
+            .write_frame(timestamp_ns, &frame.depth, frame.color.as_ref(), None)
+            .with_context(|| format!("cannot write frame {} into {}", stats.written, writer.dir().display()))?;
+        stats.written += 1;
+    }
+    Ok(stats)
+}
+
+/// Records the cloud topic until a limit is reached or `stop` is set.
+pub fn record_topic(args: &RecordArgs, limits: &RecordLimits, stop: &StopFlag) -> anyhow::Result<RecordStats> {
+    let names = args.common.service_names();
+    let node = create_node(&node_name("slope-record"))?;
+    let subscriber = CloudSubscriber::create(&node, &names).context("cannot subscribe to clouds")?;
+    tracing::info!(service = subscriber.service_name(), out = %args.out_dir.display(), "recording the cloud topic");
+
+    let mut stats = RecordStats::default();
+    let mut writer: Option<(RecordingWriter, CloudHeader)> = None;
+    let mut depth = DepthImage::default();
+    let mut color: Option<ColorImage> = None;
+    let mut timeline = Timeline::new();
+    let mut last_index: Option<u64> = None;
+    let waiting_since = Instant::now();
+    let mut first_at: Option<Instant> = None;
+    let mut last_at = Instant::now();
+    let slice = Duration::from_millis(100);
+    'outer: loop {
+        if stop.is_stopped() {
+            stats.stopped = true;
+            break;
+        }
+        match first_at {
+            None => {
+                if let Some(timeout) = limits.wait_timeout {
+                    if waiting_since.elapsed() >= timeout {
+                        anyhow::bail!(
+                            "no cloud arrived on '{}' within {:.1} s; is a source (slope-capture, \
+                             slope-replay) running with the same --service-prefix?",
+                            subscriber.service_name(),
+                            timeout.as_secs_f64()
+                        );
+                    }
+                }
+            }
+            Some(first) => {
+                if limits.duration.is_some_and(|d| first.elapsed() >= d) {
+                    break;
+                }
+                if limits.idle_timeout.is_some_and(|t| last_at.elapsed() >= t) {
+                    tracing::info!("no cloud for the idle timeout; finishing");
+                    break;
+                }
+            }
+        }
+        subscriber.listener().wait(slice)?;
+        while let Some(sample) = subscriber.receive()? {
+            let header = *sample.header();
+            let points = sample.points();
+            last_at = Instant::now();
+            if let Some(last) = last_index {
+                if header.frame_index > last + 1 {
+                    let missed = header.frame_index - last - 1;
+                    stats.missed += missed;
+                    tracing::warn!(missed, frame = header.frame_index, "clouds were missed (recorder too slow?)");
+                }
+            }
+            last_index = Some(header.frame_index);
+            if points.len() != header.point_count() {
+                stats.skipped += 1;
+                tracing::warn!(frame = header.frame_index, "cloud with a payload that does not match its header; skipped");
+                continue;
+            }
+            let (recording, first) = match &mut writer {
+                Some((recording, first)) => (recording, *first),
+                None => {
+                    let info = SourceInfo {
+                        width: header.width,
+                        height: header.height,
+                        intrinsics: header.intrinsics,
+                        unit_m: TOPIC_DEPTH_UNIT_M,
+                        mount: override_mount(header.mount, args),
+                        source: CloudSource::from_raw(header.source).unwrap_or(CloudSource::Replay),
+                        has_color: header.has_color != 0,
+                    };
+                    let sensor = match CloudSource::from_raw(header.source) {
+                        Some(CloudSource::Camera) => "kinect2",
+                        _ => "replay",
+                    };
+                    let mut recording = RecordingWriter::create(&args.out_dir, &meta_for(&info, sensor), false)
+                        .with_context(|| format!("cannot create the recording {}", args.out_dir.display()))?;
+                    recording.set_compression(args.compression.into());
+                    first_at = Some(Instant::now());
+                    tracing::info!(
+                        width = header.width,
+                        height = header.height,
+                        color = info.has_color,
+                        "first cloud; recording"
+                    );
+                    let (recording, first) = writer.insert((recording, header));
+                    (recording, *first)
+                }
+            };
+            if header.width != first.width || header.height != first.height || header.intrinsics != first.intrinsics {
+                stats.skipped += 1;
+                tracing::warn!(frame = header.frame_index, "cloud with another size or intrinsics than the first; skipped");
+                continue;
+            }
+            cloud_to_images(&header, points, TOPIC_DEPTH_UNIT_M, &mut depth, &mut color);
+            let timestamp_ns = timeline.stamp(header.source_stamp_ns);
+            recording
+                .write_frame(timestamp_ns, &depth, color.as_ref(), None)
+                .with_context(|| format!("cannot write frame {} into {}", stats.written, args.out_dir.display()))?;
+            stats.written += 1;
+            if limits.max_frames.is_some_and(|max| stats.written >= max) {
+                break 'outer;
+            }
+        }
+    }
+    match writer {
+        Some((recording, _)) => {
+            recording
+                .finish()
+                .with_context(|| format!("cannot finish the recording {}", args.out_dir.display()))?;
+        }
+        None => tracing::warn!("no cloud arrived; nothing was recorded"),
+    }
+    Ok(stats)
+}
+
+#[cfg(feature = "kinect2")]
+fn record_kinect(args: &RecordArgs, limits: &RecordLimits, stop: &StopFlag) -> anyhow::Result<RecordStats> {
+    use slope_sensor::kinect2::{DeviceSelector, Kinect2Options, Kinect2Source, Pipeline};
+    let pipeline = match &args.pipeline {
+        Some(name) => name.parse::<Pipeline>()?,
+        None => Pipeline::Default,
+    };
+    let options = Kinect2Options {
+        device: args
+            .serial
+            .clone()
+            .map_or(DeviceSelector::First, DeviceSelector::Serial),
+        pipeline,
+        color: !args.depth_only,
+        mount: override_mount(Mount::UNKNOWN, args),
+        ..Kinect2Options::default()
+    };
+    let Some(mut source) = Kinect2Source::open(options, stop.clone()).context("cannot start the Kinect v2")? else {
+        return Ok(RecordStats {
+            stopped: true,
+            ..RecordStats::default()
+        });
+    };
+    let mut writer = RecordingWriter::create(&args.out_dir, &meta_for(source.info(), "kinect2"), false)
+        .with_context(|| format!("cannot create the recording {}", args.out_dir.display()))?;
+    writer.set_compression(args.compression.into());
+    tracing::info!(serial = source.serial(), out = %args.out_dir.display(), "recording the Kinect v2");
+    let stats = record_source(&mut source, &mut writer, limits, stop);
+    source.close();
+    let stats = stats?;
+    writer
+        .finish()
+        .with_context(|| format!("cannot finish the recording {}", args.out_dir.display()))?;
+    Ok(stats)
+}
+
+#[cfg(not(feature = "kinect2"))]
+fn record_kinect(_: &RecordArgs, _: &RecordLimits, _: &StopFlag) -> anyhow::Result<RecordStats> {
+    anyhow::bail!(
+        "this slope-record was built without the Kinect v2; rebuild with \
+         `cargo build --release --features kinect2` (see README \"Running on the robot\"), \
+         or record the cloud topic of a running slope-capture (--source topic)"
+    )
+}
+
+pub fn run(args: &RecordArgs, stop: &StopFlag) -> anyhow::Result<RecordStats> {
+    let limits = RecordLimits::from_args(args);
+    let stats = match args.source {
+        RecordSource::Topic => record_topic(args, &limits, stop)?,
+        RecordSource::Kinect => record_kinect(args, &limits, stop)?,
+    };
+    tracing::info!(
+        written = stats.written,
+        missed = stats.missed,
+        skipped = stats.skipped,
+        interrupted = stats.stopped,
+        out = %args.out_dir.display(),
+        "recording finished"
+    );
+    Ok(stats)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use slope_ipc_types::Intrinsics;
+    use slope_sensor::projection::Projector;
+    use slope_sensor::recording::Recording;
+    use slope_sensor::source::RecordingSource;
+
+    #[test]
+    fn depth_from_a_projected_cloud_is_the_original_to_the_count() {
+        let intrinsics = Intrinsics {
+            fx: 365.3,
+            fy: 365.3,
+            cx: 254.7,
+            cy: 208.6,
+        };
+        let (width, height) = (64u32, 48u32);
+        let projector = Projector::new(width, height, intrinsics, 0.001);
+        let original: Vec<u16> = (0..width * height)
+            .map(|i| if i % 13 == 0 { 0 } else { 400 + ((i * 7919) % 11_000) as u16 })
+            .collect();
+        let points: Vec<CloudPoint> = original
+            .iter()
+            .enumerate()
+            .map(|(i, &d)| projector.point(i, d, CloudPoint::pack_rgb(1, 2, (i % 256) as u8)))
+            .collect();
+        let header = CloudHeader {
+            width,
+            height,
+            intrinsics,
+            has_color: 1,
+            ..CloudHeader::default()
+        };
+        let mut depth = DepthImage::default();
+        let mut color = None;
+        cloud_to_images(&header, &points, 0.001, &mut depth, &mut color);
+        assert_eq!(depth.data, original);
+        let color = color.expect("colour");
+        for (i, rgb) in color.data.iter().enumerate() {
+            assert_eq!(*rgb, [1, 2, (i % 256) as u8]);
+        }
+    }
+
+    #[test]
+    fn recording_a_source_reproduces_it() {
+        let Some(src) = ["../../../shared/data/kinect2-stairs-front"]
+            .iter()
+            .map(|p| std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(p))
+            .find(|p| p.is_dir())
+        else {
+            eprintln!("shared/data is not here; nothing to record");
+            return;
+        };
+        let recording = Recording::open(&src).expect("source recording");
+        let expected = recording.read_depth(&recording.frames()[0]).expect("depth");
+        let mut source = RecordingSource::new(recording, false);
+        let out = tempfile::tempdir().expect("tempdir");
+        let dir = out.path().join("copy");
+        let mut writer =
+            RecordingWriter::create(&dir, &meta_for(source.info(), "kinect2"), false).expect("writer");
+        let stats = record_source(&mut source, &mut writer, &RecordLimits::default(), &StopFlag::new())
+            .expect("record");
+        writer.finish().expect("finish");
+        assert_eq!(stats.written, 1);
+        let copy = Recording::open(&dir).expect("copy");
+        assert_eq!(copy.intrinsics(), source.info().intrinsics);
+        assert_eq!(copy.read_depth(&copy.frames()[0]).expect("depth"), expected);
+    }
+
+    #[test]
+    fn timestamps_start_at_zero_and_never_decrease() {
+        let mut timeline = Timeline::new();
+        assert_eq!(timeline.stamp(1_000), 0);
+        assert_eq!(timeline.stamp(34_000), 33_000);
+        assert_eq!(timeline.stamp(20_000), 33_000);
+        assert_eq!(timeline.stamp(70_000), 69_000);
+    }
+}

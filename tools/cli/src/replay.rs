@@ -1,0 +1,120 @@
+//! `slope-replay`: publishes a recording's frames as clouds, standing in for
+//! the camera.
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use anyhow::Context;
+use clap::Parser;
+use slope_ipc_types::DEFAULT_MAX_CLOUD_POINTS;
+use slope_sensor::ipc::{create_node, CloudPublisher};
+use slope_sensor::publish::{publish_stream, Pacing, PublishOptions, PublishStats, StopFlag};
+use slope_sensor::recording::Recording;
+use slope_sensor::source::{FrameSource, RecordingSource};
+
+use crate::cli::{node_name, CommonArgs};
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "slope-replay",
+    version,
+    about = "Publish a recording's depth frames as point clouds, in place of the camera",
+    long_about = "Reads a recording (see the recording format: recording.toml, frames.csv, \
+depth/*.png) and publishes each frame as an organised point cloud on the cloud topic, \
+exactly as slope-capture does with the Kinect. By default frames go out at the recorded rate.",
+    after_help = "Examples:
+  slope-replay tests/recordings/ramp16                 # recorded rate, once
+  slope-replay tests/recordings/ramp16 --loop          # forever, until Ctrl-C
+  slope-replay REC --rate 5 --wait-subscribers 1       # 5 Hz, start when the estimator is up
+  slope-replay REC --speed 0.5 --max-frames 10         # half speed, first 10 frames"
+)]
+pub struct ReplayArgs {
+    /// The recording directory (holds recording.toml and frames.csv).
+    pub recording: PathBuf,
+
+    /// Playback speed relative to the recorded timestamps (2 = twice as fast).
+    #[arg(long, default_value_t = 1.0, value_parser = positive_f64, conflicts_with = "rate")]
+    pub speed: f64,
+
+    /// Publish at a fixed rate instead of the recorded one, frames per second.
+    #[arg(long, value_parser = positive_f64)]
+    pub rate: Option<f64>,
+
+    /// Start again from the first frame at the end (indices keep increasing).
+    #[arg(long = "loop")]
+    pub looping: bool,
+
+    /// Stop after this many frames.
+    #[arg(long)]
+    pub max_frames: Option<u64>,
+
+    /// Start only when this many subscribers are connected to the cloud
+    /// topic, so that nothing is lost.
+    #[arg(long, default_value_t = 0)]
+    pub wait_subscribers: usize,
+
+    /// Give up (non-zero exit) if the subscribers are not there after this
+    /// many seconds; waits forever when not given.
+    #[arg(long, value_parser = positive_f64)]
+    pub wait_timeout: Option<f64>,
+
+    /// Skip frames whose images are missing or broken (with a warning)
+    /// instead of stopping with an error.
+    #[arg(long)]
+    pub skip_bad_frames: bool,
+
+    /// Largest cloud (width x height) to accept.
+    #[arg(long, default_value_t = DEFAULT_MAX_CLOUD_POINTS)]
+    pub max_points: usize,
+
+    #[command(flatten)]
+    pub common: CommonArgs,
+}
+
+pub fn positive_f64(text: &str) -> Result<f64, String> {
+    let value: f64 = text
+        .parse()
+        .map_err(|_| format!("'{text}' is not a number"))?;
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(format!("'{text}' must be a positive number"))
+    }
+}
+
+pub fn run(args: &ReplayArgs, stop: &StopFlag) -> anyhow::Result<PublishStats> {
+    let recording = Recording::open(&args.recording)
+        .with_context(|| format!("cannot replay {}", args.recording.display()))?;
+    let frames = recording.frames().len();
+    let mut source = RecordingSource::new(recording, args.looping);
+    let names = args.common.service_names();
+    let node = create_node(&node_name("slope-replay"))?;
+    let publisher = CloudPublisher::create(&node, &names, source.info(), args.max_points)?;
+    let info = source.info();
+    tracing::info!(
+        recording = %args.recording.display(),
+        frames,
+        width = info.width,
+        height = info.height,
+        service = publisher.service_name(),
+        "replaying"
+    );
+    let options = PublishOptions {
+        pacing: match args.rate {
+            Some(hz) => Pacing::Rate { hz },
+            None => Pacing::Recorded { speed: args.speed },
+        },
+        max_frames: args.max_frames,
+        wait_subscribers: args.wait_subscribers,
+        wait_timeout: args.wait_timeout.map(Duration::from_secs_f64),
+        skip_bad_frames: args.skip_bad_frames,
+    };
+    let stats = publish_stream(&mut source, &publisher, &options, stop)?;
+    tracing::info!(
+        published = stats.published,
+        skipped_bad = stats.skipped_bad,
+        interrupted = stats.stopped,
+        "replay finished"
+    );
+    Ok(stats)
+}

@@ -1,0 +1,59 @@
+//! Every binary teaches with --help and refuses bad arguments with a
+//! non-zero exit. (These tests also make `cargo test` build the binaries
+//! that the multi-process tests in tests/ spawn.)
+
+use std::process::Command;
+
+fn run(bin: &str, args: &[&str]) -> (bool, String, String) {
+    let output = Command::new(bin)
+        .args(args)
+        .output()
+        .unwrap_or_else(|e| panic!("cannot run {bin}: {e}"));
+    (
+        output.status.success(),
+        String::from_utf8_lossy(&output.stdout).into_owned(),
+        String::from_utf8_lossy(&output.stderr).into_owned(),
+    )
+}
+
+const BINARIES: [(&str, &str); 4] = [
+    ("slope-replay", env!("CARGO_BIN_EXE_slope-replay")),
+    ("slope-estimator", env!("CARGO_BIN_EXE_slope-estimator")),
+    ("slope-echo", env!("CARGO_BIN_EXE_slope-echo")),
+    ("slope-demo", env!("CARGO_BIN_EXE_slope-demo")),
+];
+
+#[test]
+fn help_names_the_program_and_shows_examples() {
+    for (name, bin) in BINARIES {
+        let (ok, stdout, _) = run(bin, &["--help"]);
+        assert!(ok, "{name} --help failed");
+        assert!(stdout.contains(name), "{name} --help does not name it");
+        assert!(stdout.contains("Examples:"), "{name} --help has no examples");
+        assert!(
+            stdout.contains("--service-prefix"),
+            "{name} --help lacks --service-prefix"
+        );
+    }
+}
+
+#[test]
+fn unknown_flags_fail_with_a_message() {
+    for (name, bin) in BINARIES {
+        let (ok, _, stderr) = run(bin, &["--no-such-flag"]);
+        assert!(!ok, "{name} accepted an unknown flag");
+        assert!(stderr.contains("--no-such-flag"), "{name}: {stderr}");
+    }
+}
+
+#[test]
+fn bad_values_are_refused() {
+    let replay = env!("CARGO_BIN_EXE_slope-replay");
+    let (ok, _, stderr) = run(replay, &["somewhere", "--speed", "-2"]);
+    assert!(!ok);
+    assert!(stderr.contains("positive"), "{stderr}");
+    let estimator = env!("CARGO_BIN_EXE_slope-estimator");
+    let (ok, _, stderr) = run(estimator, &["--method", "magic"]);
+    assert!(!ok);
+    assert!(stderr.contains("paper, least-squares or tls"), "{stderr}");
+}

@@ -1,0 +1,435 @@
+//! The scene description: what `slope-synth` renders, as read from a TOML
+//! scene file (see the crate README for the format and an example).
+//!
+//! World frame: x right, y forward, z up, metres; the origin is on the
+//! ground directly below the camera's optical centre in the first frame.
+//! Parsing is pure (text in, [`Scene`] and [`SensorModel`] out); only
+//! [`load_scene_file`] touches the disk.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::SceneError;
+use crate::sensor_model::SensorModel;
+
+/// Everything that is in front of the camera, and the camera itself.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(default, deny_unknown_fields)]
+pub struct Scene {
+    /// `[camera]`: the depth camera's image size and intrinsics.
+    pub camera: CameraModel,
+    /// `[mount]`: the camera's nominal pose above the ground.
+    pub mount: MountPose,
+    /// `[motion]`: how the camera moves between frames.
+    pub motion: Motion,
+    /// `[ramp]`: the inclined plane; absent = flat ground only.
+    pub ramp: Option<Ramp>,
+    /// `[[walls]]`: walls parallel to the forward axis.
+    pub walls: Vec<SideWall>,
+    /// `[[boxes]]`: boxes standing on the ground.
+    pub boxes: Vec<GroundBox>,
+}
+
+/// Pinhole depth camera, pixel centres at integer coordinates (the ray
+/// through pixel (u, v) is `((u - cx) / fx, (v - cy) / fy, 1)`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct CameraModel {
+    pub width: u32,
+    pub height: u32,
+    pub fx: f64,
+    pub fy: f64,
+    pub cx: f64,
+    pub cy: f64,
+}
+
+impl CameraModel {
+    /// The Kinect v2 depth camera (512 x 424, about 70° x 60° field of view).
+    pub const KINECT2: CameraModel = CameraModel {
+        width: 512,
+        height: 424,
+        fx: 365.0,
+        fy: 365.0,
+        cx: 255.5,
+        cy: 211.5,
+    };
+}
+
+impl Default for CameraModel {
+    fn default() -> Self {
+        Self::KINECT2
+    }
+}
+
+/// The camera's nominal pose, as in the recording format's `[mount]`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct MountPose {
+    /// Optical centre above the ground, metres.
+    pub height_m: f64,
+    /// Rotation about the camera x axis; negative looks down.
+    pub pitch_deg: f64,
+    /// Rotation about the optical axis; positive dips the image's right side.
+    pub roll_deg: f64,
+}
+
+impl Default for MountPose {
+    fn default() -> Self {
+        Self {
+            height_m: 0.5,
+            pitch_deg: -20.0,
+            roll_deg: 0.0,
+        }
+    }
+}
+
+/// Straight-line motion of the camera at constant height.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[serde(default, deny_unknown_fields)]
+pub struct Motion {
+    /// Forward speed along +y, metres per second (frames are 1/30 s apart).
+    pub speed_mps: f64,
+}
+
+/// Which way the inclined plane goes, seen from the camera.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum SlopeDirection {
+    /// The surface rises away from the camera (a ramp up, or a wall at 90°).
+    #[default]
+    Ascending,
+    /// The ground drops away from the camera (a ramp down).
+    Descending,
+}
+
+/// The inclined plane. Its foot line (where it meets the ground it starts
+/// from) is perpendicular to its uphill/downhill direction.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Ramp {
+    pub direction: SlopeDirection,
+    /// Angle to the ground, degrees, in (0, 90]; 90 is a wall (ascending only).
+    pub slope_deg: f64,
+    /// Forward distance from the camera's ground point to the foot line's
+    /// centre, metres.
+    pub distance_m: f64,
+    /// Width across the slope, metres; `inf` for unbounded.
+    pub width_m: f64,
+    /// Length along the slope, metres; `inf` for unbounded. The ramp rises
+    /// (or drops) `length_m * sin(slope)`.
+    pub length_m: f64,
+    /// Length of the flat landing after the slope, metres (0 = none). An
+    /// ascending ramp ends in a vertical back face after its landing; a wall
+    /// (90°) without landing gets a 0.1 m thick top.
+    pub landing_m: f64,
+    /// Rotation of the ramp about the vertical through the foot line's
+    /// centre, degrees; positive turns the uphill direction to the left.
+    pub yaw_deg: f64,
+    /// Sideways offset of the foot line's centre, metres, positive right.
+    pub offset_m: f64,
+}
+
+impl Default for Ramp {
+    fn default() -> Self {
+        Self {
+            direction: SlopeDirection::Ascending,
+            slope_deg: 16.0,
+            distance_m: 1.5,
+            width_m: 3.0,
+            length_m: 3.0,
+            landing_m: 1.0,
+            yaw_deg: 0.0,
+            offset_m: 0.0,
+        }
+    }
+}
+
+/// A wall parallel to the forward axis, standing on the ground.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SideWall {
+    /// Sideways position of the face that looks at the centre line,
+    /// metres (negative = left). The wall extends away from the centre line.
+    pub x_m: f64,
+    /// Forward extent, metres.
+    pub from_m: f64,
+    pub to_m: f64,
+    pub height_m: f64,
+    pub thickness_m: f64,
+}
+
+impl Default for SideWall {
+    fn default() -> Self {
+        Self {
+            x_m: -1.5,
+            from_m: 0.0,
+            to_m: 6.0,
+            height_m: 1.0,
+            thickness_m: 0.1,
+        }
+    }
+}
+
+/// A box standing on the ground (z = 0).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct GroundBox {
+    /// Centre of the footprint, metres (x right, y forward).
+    pub x_m: f64,
+    pub y_m: f64,
+    /// Size along its own x (across), y (along) and z (up), metres.
+    pub size_m: [f64; 3],
+    /// Rotation about the vertical, degrees, positive counter-clockwise
+    /// seen from above.
+    pub yaw_deg: f64,
+}
+
+impl Default for GroundBox {
+    fn default() -> Self {
+        Self {
+            x_m: 0.5,
+            y_m: 1.2,
+            size_m: [0.3, 0.3, 0.3],
+            yaw_deg: 0.0,
+        }
+    }
+}
+
+/// A parsed scene file: the scene and its optional `[sensor]` table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneFile {
+    pub scene: Scene,
+    /// `None` when the file has no `[sensor]` table.
+    pub sensor: Option<SensorModel>,
+}
+
+impl Scene {
+    /// The default scene of the command line: a 16° ascending ramp 1.5 m
+    /// ahead, camera 0.5 m high looking 20° down.
+    pub fn default_ramp() -> Self {
+        Self {
+            ramp: Some(Ramp::default()),
+            ..Self::default()
+        }
+    }
+
+    /// The ground truth slope: the unsigned angle between the ramp's and
+    /// the ground's normals, degrees; `None` for flat ground.
+    pub fn truth_slope_deg(&self) -> Option<f64> {
+        self.ramp.map(|r| r.slope_deg)
+    }
+
+    /// Checks every value; the error names the key.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        let c = &self.camera;
+        check(c.width > 0 && c.height > 0, "camera.width", "image size must be > 0")?;
+        check(c.width <= 4096 && c.height <= 4096, "camera.width", "image size must be <= 4096")?;
+        for (key, v) in [("camera.fx", c.fx), ("camera.fy", c.fy)] {
+            check(v.is_finite() && v > 0.0, key, "must be a positive number")?;
+        }
+        for (key, v) in [("camera.cx", c.cx), ("camera.cy", c.cy)] {
+            check(v.is_finite(), key, "must be a finite number")?;
+        }
+        let m = &self.mount;
+        check(m.height_m.is_finite() && m.height_m > 0.0, "mount.height_m", "must be > 0")?;
+        check(
+            m.pitch_deg.is_finite() && m.pitch_deg.abs() < 90.0,
+            "mount.pitch_deg",
+            "must lie in (-90, 90)",
+        )?;
+        check(
+            m.roll_deg.is_finite() && m.roll_deg.abs() < 90.0,
+            "mount.roll_deg",
+            "must lie in (-90, 90)",
+        )?;
+        check(
+            self.motion.speed_mps.is_finite() && self.motion.speed_mps.abs() <= 10.0,
+            "motion.speed_mps",
+            "must lie in [-10, 10]",
+        )?;
+        if let Some(r) = &self.ramp {
+            check(
+                r.slope_deg.is_finite() && r.slope_deg > 0.0 && r.slope_deg <= 90.0,
+                "ramp.slope_deg",
+                "must lie in (0, 90]",
+            )?;
+            check(
+                !(r.direction == SlopeDirection::Descending && r.slope_deg >= 90.0),
+                "ramp.slope_deg",
+                "a descending slope must be below 90°",
+            )?;
+            check(
+                r.distance_m.is_finite() && r.distance_m > 0.0,
+                "ramp.distance_m",
+                "must be > 0 (the foot line lies ahead of the camera)",
+            )?;
+            check(!r.width_m.is_nan() && r.width_m > 0.0, "ramp.width_m", "must be > 0 or inf")?;
+            check(!r.length_m.is_nan() && r.length_m > 0.0, "ramp.length_m", "must be > 0 or inf")?;
+            check(
+                r.landing_m.is_finite() && r.landing_m >= 0.0,
+                "ramp.landing_m",
+                "must be >= 0",
+            )?;
+            check(r.yaw_deg.is_finite() && r.yaw_deg.abs() < 90.0, "ramp.yaw_deg", "must lie in (-90, 90)")?;
+            check(r.offset_m.is_finite(), "ramp.offset_m", "must be a finite number")?;
+        }
+        for (i, w) in self.walls.iter().enumerate() {
+            let key = |k: &str| format!("walls[{i}].{k}");
+            check(w.x_m.is_finite() && w.x_m != 0.0, &key("x_m"), "must be finite and non-zero")?;
+            check(w.from_m.is_finite() && w.to_m.is_finite(), &key("from_m"), "must be finite")?;
+            check(w.to_m > w.from_m, &key("to_m"), "must be greater than from_m")?;
+            check(w.height_m.is_finite() && w.height_m > 0.0, &key("height_m"), "must be > 0")?;
+            check(
+                w.thickness_m.is_finite() && w.thickness_m > 0.0,
+                &key("thickness_m"),
+                "must be > 0",
+            )?;
+        }
+        for (i, b) in self.boxes.iter().enumerate() {
+            let key = |k: &str| format!("boxes[{i}].{k}");
+            check(b.x_m.is_finite() && b.y_m.is_finite(), &key("x_m"), "must be finite")?;
+            check(
+                b.size_m.iter().all(|s| s.is_finite() && *s > 0.0),
+                &key("size_m"),
+                "every size must be > 0",
+            )?;
+            check(b.yaw_deg.is_finite(), &key("yaw_deg"), "must be finite")?;
+        }
+        check(self.walls.len() + self.boxes.len() < usize::from(u16::MAX), "boxes", "too many objects")?;
+        Ok(())
+    }
+}
+
+fn check(ok: bool, key: &str, reason: &str) -> Result<(), SceneError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(SceneError::InvalidKey {
+            key: key.to_string(),
+            reason: reason.to_string(),
+        })
+    }
+}
+
+/// Parses the text of a scene file: the scene tables and an optional
+/// `[sensor]` table. `path` is only used in errors. Unknown keys are errors
+/// (a typo must not silently fall back to a default).
+pub fn parse_scene(text: &str, path: &Path) -> Result<SceneFile, SceneError> {
+    let mut table: toml::Table = toml::from_str(text).map_err(|source| SceneError::Toml {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let sensor = table
+        .remove("sensor")
+        .map(|value| {
+            SensorModel::deserialize(value).map_err(|source| SceneError::Toml {
+                path: path.to_path_buf(),
+                source,
+            })
+        })
+        .transpose()?;
+    let scene = Scene::deserialize(toml::Value::Table(table)).map_err(|source| SceneError::Toml {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    scene.validate().map_err(|e| e.in_file(path))?;
+    if let Some(model) = &sensor {
+        model.validate().map_err(|e| e.in_file(path))?;
+    }
+    Ok(SceneFile { scene, sensor })
+}
+
+/// Reads and parses a scene file.
+pub fn load_scene_file(path: &Path) -> Result<SceneFile, SceneError> {
+    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse_scene(&text, path)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn full_scene_file_parses() {
+        let text = r#"
+            [camera]
+            fx = 366.0
+            [mount]
+            height_m = 0.6
+            pitch_deg = -25.0
+            [motion]
+            speed_mps = 0.3
+            [ramp]
+            direction = "descending"
+            slope_deg = 10.0
+            distance_m = 2.0
+            width_m = inf
+            [[walls]]
+            x_m = 1.2
+            [[boxes]]
+            x_m = -0.4
+            y_m = 1.0
+            size_m = [0.2, 0.3, 0.4]
+            [sensor]
+            axial_noise = false
+        "#;
+        let file = parse_scene(text, Path::new("s.toml")).expect("valid scene");
+        let s = &file.scene;
+        assert_eq!(s.camera.fx, 366.0);
+        assert_eq!(s.camera.fy, 365.0);
+        assert_eq!(s.mount.height_m, 0.6);
+        assert_eq!(s.mount.roll_deg, 0.0);
+        assert_eq!(s.motion.speed_mps, 0.3);
+        let ramp = s.ramp.expect("has a ramp");
+        assert_eq!(ramp.direction, SlopeDirection::Descending);
+        assert!(ramp.width_m.is_infinite());
+        assert_eq!(ramp.length_m, Ramp::default().length_m);
+        assert_eq!(s.walls[0].x_m, 1.2);
+        assert_eq!(s.boxes[0].size_m, [0.2, 0.3, 0.4]);
+        let sensor = file.sensor.expect("has a sensor table");
+        assert!(!sensor.axial_noise);
+        assert_eq!(sensor.lateral_noise_px, SensorModel::default().lateral_noise_px);
+    }
+
+    #[test]
+    fn empty_file_is_flat_ground() {
+        let file = parse_scene("", Path::new("s.toml")).expect("valid");
+        assert_eq!(file.scene, Scene::default());
+        assert!(file.scene.ramp.is_none());
+        assert!(file.sensor.is_none());
+    }
+
+    #[test]
+    fn typo_is_an_error_naming_the_key() {
+        let err = parse_scene("[ramp]\nslope_dg = 3.0\n", Path::new("s.toml"))
+            .expect_err("unknown key");
+        let text = err.to_string();
+        assert!(text.contains("slope_dg") && text.contains("s.toml"), "{text}");
+    }
+
+    #[test]
+    fn bad_value_names_file_and_key() {
+        let err = parse_scene("[ramp]\nslope_deg = 95.0\n", Path::new("x.toml"))
+            .expect_err("out of range");
+        let text = err.to_string();
+        assert!(text.contains("ramp.slope_deg") && text.contains("x.toml"), "{text}");
+        let err = parse_scene("[[walls]]\nfrom_m = 3.0\nto_m = 1.0\n", Path::new("x.toml"))
+            .expect_err("empty wall");
+        assert!(err.to_string().contains("walls[0].to_m"), "{err}");
+        let err = parse_scene("[ramp]\ndirection = \"descending\"\nslope_deg = 90.0\n", Path::new("x.toml"))
+            .expect_err("descending wall");
+        assert!(err.to_string().contains("ramp.slope_deg"), "{err}");
+    }
+
+    #[test]
+    fn default_scene_round_trips_through_toml() {
+        let scene = Scene::default_ramp();
+        let text = toml::to_string(&scene).expect("serialisable");
+        let back = parse_scene(&text, Path::new("rt.toml")).expect("parses back");
+        assert_eq!(back.scene, scene);
+    }
+}

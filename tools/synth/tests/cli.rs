@@ -1,0 +1,70 @@
+//! The `slope-synth` binary: writes what the flags say, teaches in --help,
+//! and fails with a non-zero exit and a message naming the problem.
+
+use std::process::Command;
+
+use slope_sensor::recording::Recording;
+
+fn synth() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_slope-synth"))
+}
+
+#[test]
+fn writes_the_documented_default_scene() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("ramp");
+    let status = synth()
+        .args(["--slope", "16", "--distance", "1.5", "--height", "0.5", "--pitch", "-20"])
+        .args(["--frames", "2", "--seed", "7", "-o"])
+        .arg(&out)
+        .env("RUST_LOG", "warn")
+        .status()
+        .expect("runs");
+    assert!(status.success());
+    let rec = Recording::open(&out).expect("readable");
+    assert_eq!(rec.frames().len(), 2);
+    assert_eq!(rec.meta().truth.slope_deg, Some(16.0));
+    assert_eq!(rec.meta().sensor, "synthetic");
+    assert_eq!(rec.frames()[1].timestamp_ns, 33_333_333);
+    let mount = rec.mount();
+    assert_eq!((mount.height_m, mount.pitch_deg, mount.roll_deg), (0.5, -20.0, 0.0));
+    let color = rec.read_color(&rec.frames()[0]).expect("readable");
+    assert!(color.is_some());
+}
+
+#[test]
+fn help_teaches_with_examples() {
+    let out = synth().arg("--help").output().expect("runs");
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    for needle in ["Examples:", "--descending", "--clean", "--scene", "slope-synth --slope 16"] {
+        assert!(text.contains(needle), "--help lacks {needle}");
+    }
+}
+
+#[test]
+fn failures_exit_non_zero_and_say_why() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("something"), "x").expect("writable");
+    let out = synth()
+        .args(["--frames", "1", "-o"])
+        .arg(dir.path())
+        .output()
+        .expect("runs");
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("failed to write recording"), "{err}");
+
+    let scene = dir.path().join("bad.toml");
+    std::fs::write(&scene, "[ramp]\nslope_deg = -5.0\n").expect("writable");
+    let out = synth()
+        .arg("--scene")
+        .arg(&scene)
+        .arg("-o")
+        .arg(dir.path().join("new"))
+        .output()
+        .expect("runs");
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("ramp.slope_deg") && err.contains("bad.toml"), "{err}");
+}
