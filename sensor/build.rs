@@ -80,7 +80,10 @@ mod kinect2 {
             )),
         };
         if let Err(err) = bindings.write_to_file(out_dir.join("freenect2_shim.rs")) {
-            fail(&format!("writing the bindings into {}: {err}", out_dir.display()));
+            fail(&format!(
+                "writing the bindings into {}: {err}",
+                out_dir.display()
+            ));
         }
     }
 
@@ -95,8 +98,16 @@ mod kinect2 {
             .cargo_metadata(false)
             .probe("freenect2")
             .map_err(|err| {
+                // pkg-config's own report is long; keep its gist.
+                let detail = err.to_string();
+                let gist = detail
+                    .lines()
+                    .map(str::trim)
+                    .find(|line| line.contains("not found") || line.contains("version"))
+                    .unwrap_or("pkg-config failed")
+                    .to_string();
                 format!(
-                    "libfreenect2 was not found through pkg-config ({err}).\n\
+                    "libfreenect2 (pkg-config package `freenect2` >= 0.2) was not found: {gist}\n\
                      Install libfreenect2 from its upstream source \
                      (github.com/OpenKinect/libfreenect2; see README \"Running on the robot\"), then\n\
                      - point pkg-config at it: PKG_CONFIG_PATH=<prefix>/lib/pkgconfig, or\n\
@@ -114,7 +125,11 @@ mod kinect2 {
 
     fn from_prefix(prefix: &Path) -> Result<Freenect2Paths, String> {
         let include = prefix.join("include");
-        if !include.join("libfreenect2").join("libfreenect2.hpp").is_file() {
+        if !include
+            .join("libfreenect2")
+            .join("libfreenect2.hpp")
+            .is_file()
+        {
             return Err(format!(
                 "{PREFIX_ENV}={} has no include/libfreenect2/libfreenect2.hpp; \
                  set it to the prefix libfreenect2 was installed into \

@@ -41,23 +41,51 @@ fn stages(c: &mut Criterion) {
     });
     let mut rng = ChaCha8Rng::seed_from_u64(0);
     let planes = seg.segment(&view, &keep, &config.ransac, &mut rng).to_vec();
-    let largest = planes.iter().max_by_key(|p| p.inliers.len()).map(|p| p.inliers.clone()).unwrap_or_default();
+    let largest = planes
+        .iter()
+        .max_by_key(|p| p.inliers.len())
+        .map(|p| p.inliers.clone())
+        .unwrap_or_default();
 
     let mut pt = PassThrough::new();
     c.bench_function("pass_through/largest_plane", |b| {
-        b.iter(|| black_box(pt.filter(view.points, &largest, config.pass_through.max_points).0.len()))
+        b.iter(|| {
+            black_box(
+                pt.filter(view.points, &largest, config.pass_through.max_points)
+                    .0
+                    .len(),
+            )
+        })
     });
-    let members = pt.filter(view.points, &largest, config.pass_through.max_points).0.to_vec();
+    let members = pt
+        .filter(view.points, &largest, config.pass_through.max_points)
+        .0
+        .to_vec();
 
     let mut ne = NormalEstimator::new();
     c.bench_function("normals/10k_points_k100", |b| {
-        b.iter(|| black_box(ne.estimate(&view, &members, &config.normals, &Vector3::zeros()).1))
+        b.iter(|| {
+            black_box(
+                ne.estimate(&view, &members, &config.normals, &Vector3::zeros())
+                    .1,
+            )
+        })
     });
-    let normals = ne.estimate(&view, &members, &config.normals, &Vector3::zeros()).0.to_vec();
+    let normals = ne
+        .estimate(&view, &members, &config.normals, &Vector3::zeros())
+        .0
+        .to_vec();
 
     let mut km = CosineKmeans::new();
     c.bench_function("cosine_kmeans/10k_normals", |b| {
-        b.iter(|| black_box(km.cluster(&normals, config.kmeans.clusters, config.kmeans.max_iterations)))
+        b.iter(|| {
+            black_box(km.cluster(
+                &normals,
+                config.kmeans.clusters,
+                config.kmeans.max_iterations,
+                config.kmeans.merge_spread_ratio,
+            ))
+        })
     });
 
     let ground = vec![Vector3::new(0.0, -0.94, -0.34); 1000];
@@ -69,7 +97,10 @@ fn stages(c: &mut Criterion) {
     });
 
     for method in SlopeMethod::ALL {
-        let mut est = Estimator::new(EstimatorConfig { method, ..EstimatorConfig::default() });
+        let mut est = Estimator::new(EstimatorConfig {
+            method,
+            ..EstimatorConfig::default()
+        });
         c.bench_function(&format!("estimator/{}", method.name()), |b| {
             b.iter(|| black_box(est.estimate(&view).slope_deg))
         });

@@ -8,9 +8,15 @@ use slope_pipeline::fixtures::{Scene, SceneCloud};
 use slope_pipeline::{Estimator, EstimatorConfig, SlopeMethod};
 
 fn main() {
-    let frames: usize = std::env::args().nth(1).and_then(|a| a.parse().ok()).unwrap_or(3);
+    let frames: usize = std::env::args()
+        .nth(1)
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(3);
     for method in SlopeMethod::ALL {
-        let mut est = Estimator::new(EstimatorConfig { method, ..EstimatorConfig::default() });
+        let mut est = Estimator::new(EstimatorConfig {
+            method,
+            ..EstimatorConfig::default()
+        });
         println!("method {}", method.name());
         for (name, scene) in [
             ("5", Scene::ramp(5.0)),
@@ -20,7 +26,7 @@ fn main() {
             ("47", Scene::ramp(47.0)),
             ("60", Scene::ramp(60.0)),
             ("90 wall", Scene::ramp(90.0)),
-            ("-12.5", Scene::ramp(-12.5)),
+            ("-12.5", Scene::ramp_at(-12.5, 1.2, 0.8, -30.0, 0.0)),
             ("16 walls", Scene::ramp_between_walls(16.0)),
         ] {
             let mut slopes = Vec::new();
@@ -30,7 +36,10 @@ fn main() {
             for seed in 0..frames {
                 let cloud = SceneCloud::kinect2(&scene, seed as u64);
                 let e = est.estimate(&cloud.view());
-                status = format!("{:?} d={:.2}/{:.2}", e.status, e.distance_m, cloud.truth_distance_m);
+                status = format!(
+                    "{:?} d={:.2}/{:.2}",
+                    e.status, e.distance_m, cloud.truth_distance_m
+                );
                 slopes.push(e.slope_deg);
                 total += e.timings.total_ms;
                 for (n, ms) in &e.timings.stages {
@@ -42,7 +51,10 @@ fn main() {
             }
             slopes.sort_by(f64::total_cmp);
             let median = slopes[slopes.len() / 2];
-            let st: Vec<String> = stages.iter().map(|(n, ms)| format!("{n} {:.1}", ms / frames as f64)).collect();
+            let st: Vec<String> = stages
+                .iter()
+                .map(|(n, ms)| format!("{n} {:.1}", ms / frames as f64))
+                .collect();
             println!(
                 "  {name:>9}: median {median:8.3} err {:+.3}  {status}  total {:.1} ms [{}]",
                 median - scene.truth_slope_deg,

@@ -19,7 +19,7 @@
 //! neighbours = 100          # K
 //!
 //! [kmeans]                  # paper 3.1
-//! clusters = 2
+//! clusters = 3
 //!
 //! [cumulative]              # paper 3.2
 //! draws = 100
@@ -173,6 +173,10 @@ pub struct NormalsConfig {
     pub neighbours: usize,
     /// Largest pixel window radius tried before the k-d tree takes over.
     pub max_window_radius_px: usize,
+    /// Fit each neighbourhood for depth noise along the viewing ray
+    /// (`C^-1 r`) instead of isotropic noise (the smallest eigenvector, as
+    /// the paper); see `normals.rs`.
+    pub ray_noise_correction: bool,
 }
 
 impl Default for NormalsConfig {
@@ -180,6 +184,7 @@ impl Default for NormalsConfig {
         Self {
             neighbours: 100,
             max_window_radius_px: 12,
+            ray_noise_correction: true,
         }
     }
 }
@@ -191,13 +196,18 @@ pub struct KmeansConfig {
     /// Clusters per plane; the largest is kept.
     pub clusters: usize,
     pub max_iterations: usize,
+    /// Clusters whose centre is within this many RMS spreads of the dominant
+    /// cluster's centre are kept with it (one population k-means cut up);
+    /// 0 keeps the dominant cluster only, as the paper.
+    pub merge_spread_ratio: f64,
 }
 
 impl Default for KmeansConfig {
     fn default() -> Self {
         Self {
-            clusters: 2,
-            max_iterations: 50,
+            clusters: 3,
+            max_iterations: 30,
+            merge_spread_ratio: 2.5,
         }
     }
 }
@@ -347,6 +357,13 @@ impl EstimatorConfig {
         )?;
         at_least("kmeans.clusters", self.kmeans.clusters, 1)?;
         at_least("kmeans.max_iterations", self.kmeans.max_iterations, 1)?;
+        if !(self.kmeans.merge_spread_ratio.is_finite() && self.kmeans.merge_spread_ratio >= 0.0) {
+            return Err(invalid(
+                "kmeans.merge_spread_ratio",
+                self.kmeans.merge_spread_ratio,
+                "must be a finite number >= 0",
+            ));
+        }
         at_least("cumulative.draws", self.cumulative.draws, 1)?;
         let s = &self.selection;
         angle("selection.ground_max_tilt_deg", s.ground_max_tilt_deg)?;
@@ -408,7 +425,10 @@ mod tests {
         assert_eq!(c.method, SlopeMethod::LeastSquares);
         assert_eq!(c.seed, 7);
         assert_eq!(c.ransac.distance_threshold_m, 0.01);
-        assert_eq!(c.ransac.max_iterations, RansacConfig::default().max_iterations);
+        assert_eq!(
+            c.ransac.max_iterations,
+            RansacConfig::default().max_iterations
+        );
         assert_eq!(c.normals, NormalsConfig::default());
         assert_eq!(
             EstimatorConfig::from_toml_str("").unwrap(),
@@ -420,7 +440,7 @@ mod tests {
     fn round_trips_through_toml() {
         let mut c = EstimatorConfig::default();
         c.method = SlopeMethod::Tls;
-        c.kmeans.clusters = 3;
+        c.kmeans.clusters = 4;
         let text = toml::to_string(&c).unwrap();
         assert_eq!(EstimatorConfig::from_toml_str(&text).unwrap(), c);
     }
@@ -440,7 +460,10 @@ mod tests {
     #[test]
     fn method_names() {
         assert_eq!(parse_method("paper"), Some(SlopeMethod::Paper));
-        assert_eq!(parse_method("least-squares"), Some(SlopeMethod::LeastSquares));
+        assert_eq!(
+            parse_method("least-squares"),
+            Some(SlopeMethod::LeastSquares)
+        );
         assert_eq!(parse_method("tls"), Some(SlopeMethod::Tls));
         assert_eq!(parse_method("TLS"), None);
     }

@@ -82,8 +82,12 @@ mod tests {
 
     #[test]
     fn same_seed_same_answer_and_empty_sets() {
-        let g: Vec<_> = (0..10).map(|i| Vector3::new(0.01 * i as f64, 0.0, 1.0)).collect();
-        let r: Vec<_> = (0..10).map(|i| Vector3::new(1.0, 0.02 * i as f64, 0.5)).collect();
+        let g: Vec<_> = (0..10)
+            .map(|i| Vector3::new(0.01 * i as f64, 0.0, 1.0))
+            .collect();
+        let r: Vec<_> = (0..10)
+            .map(|i| Vector3::new(1.0, 0.02 * i as f64, 0.5))
+            .collect();
         let a = cumulative_angle(&r, &g, 100, &mut ChaCha8Rng::seed_from_u64(5));
         let b = cumulative_angle(&r, &g, 100, &mut ChaCha8Rng::seed_from_u64(5));
         assert_eq!(a, b);

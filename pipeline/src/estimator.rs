@@ -20,7 +20,9 @@ use crate::cumulative_angle::cumulative_angle;
 use crate::normals::NormalEstimator;
 use crate::pass_through::PassThrough;
 use crate::plane_fit::{fit_least_squares, fit_tls, Moments, Plane};
-use crate::plane_selection::{axis_distance, select_planes, slope_sign, GroundSource, PlaneSummary};
+use crate::plane_selection::{
+    axis_distance, select_planes, slope_sign, GroundSource, PlaneSummary,
+};
 use crate::ransac_planes::PlaneSegmenter;
 use crate::statistical_outlier::StatisticalOutlierFilter;
 
@@ -45,7 +47,11 @@ pub struct StageTimings {
 impl StageTimings {
     /// The time of a stage, 0 when it did not run.
     pub fn stage_ms(&self, name: &str) -> f64 {
-        self.stages.iter().filter(|(n, _)| *n == name).map(|(_, ms)| ms).sum()
+        self.stages
+            .iter()
+            .filter(|(n, _)| *n == name)
+            .map(|(_, ms)| ms)
+            .sum()
     }
 }
 
@@ -189,7 +195,9 @@ impl Estimator {
         let mut rng = ChaCha8Rng::seed_from_u64(self.config.seed);
         // 1. Statistical outlier removal.
         let kept = if self.config.outlier.enabled {
-            self.outlier.filter(cloud, &self.config.outlier, &mut self.keep).kept
+            self.outlier
+                .filter(cloud, &self.config.outlier, &mut self.keep)
+                .kept
         } else {
             self.keep.clear();
             self.keep.extend(cloud.points.iter().map(is_measured));
@@ -200,17 +208,25 @@ impl Estimator {
             return Estimate::failed(EstimateStatus::TooFewPoints, method);
         }
         // 2. RANSAC planes.
-        let planes = self.segmenter.segment(cloud, &self.keep, &self.config.ransac, &mut rng);
+        let planes = self
+            .segmenter
+            .segment(cloud, &self.keep, &self.config.ransac, &mut rng);
         clock.lap("ransac");
         // Plane selection.
         let w = cloud.width;
         let bottom_row = cloud.height - cloud.height / 3;
         self.summaries.clear();
-        self.summaries.extend(planes.iter().map(|p| PlaneSummary {
-            plane: p.plane,
-            inliers: p.inliers.len(),
-            bottom_inliers: p.inliers.iter().filter(|&&i| i as usize / w >= bottom_row).count(),
-            centroid: p.centroid,
+        self.summaries.extend(planes.iter().map(|p| {
+            PlaneSummary {
+                plane: p.plane,
+                inliers: p.inliers.len(),
+                bottom_inliers: p
+                    .inliers
+                    .iter()
+                    .filter(|&&i| i as usize / w >= bottom_row)
+                    .count(),
+                centroid: p.centroid,
+            }
         }));
         let mount_up = cloud.mount.up_vector().map(Vector3::from);
         let selection = select_planes(&self.summaries, mount_up, &self.config.selection);
@@ -272,8 +288,16 @@ impl Estimator {
                 };
                 clock.lap("cumulative");
                 let incl_plane = Plane::from_point_normal(&inclined_seg.centroid, &incl);
-                let ground_plane = ground.and_then(|n| ground_seg.and_then(|g| Plane::from_point_normal(&g.centroid, &n)));
-                (incl_plane, ground_plane, summary.mean_deg, summary.std_deg, summary.samples)
+                let ground_plane = ground.and_then(|n| {
+                    ground_seg.and_then(|g| Plane::from_point_normal(&g.centroid, &n))
+                });
+                (
+                    incl_plane,
+                    ground_plane,
+                    summary.mean_deg,
+                    summary.std_deg,
+                    summary.samples,
+                )
             }
             SlopeMethod::LeastSquares | SlopeMethod::Tls => {
                 let fit = |inliers: &[u32]| {
@@ -283,7 +307,11 @@ impl Estimator {
                             m.add(&to_vec3(p));
                         }
                     }
-                    let plane = if method == SlopeMethod::Tls { fit_tls(&m) } else { fit_least_squares(&m) };
+                    let plane = if method == SlopeMethod::Tls {
+                        fit_tls(&m)
+                    } else {
+                        fit_least_squares(&m)
+                    };
                     plane.map(|p| p.oriented_towards(&Vector3::zeros()))
                 };
                 let incl_plane = fit(&inclined_seg.inliers);
@@ -342,9 +370,14 @@ fn paper_plane_normals(
     clock.lap("pass_through");
     let (found, _) = normals.estimate(cloud, members, &config.normals, &Vector3::zeros());
     clock.lap("normals");
-    let clustering = kmeans.cluster(found, config.kmeans.clusters, config.kmeans.max_iterations);
+    let clustering = kmeans.cluster(
+        found,
+        config.kmeans.clusters,
+        config.kmeans.max_iterations,
+        config.kmeans.merge_spread_ratio,
+    );
     let result = clustering.and_then(|c| {
-        out.extend(kmeans.members(c.dominant).copied());
+        out.extend(kmeans.kept_members(&c).copied());
         let mean = out.iter().sum::<Vector3<f64>>();
         mean.try_normalize(1e-12)
     });

@@ -44,7 +44,13 @@ impl Scene {
 
     /// As [`Scene::ramp`] with the ramp's foot at `foot_m` and the camera at
     /// `height_m`, `pitch_deg`, `roll_deg`.
-    pub fn ramp_at(slope_deg: f64, foot_m: f64, height_m: f64, pitch_deg: f64, roll_deg: f64) -> Self {
+    pub fn ramp_at(
+        slope_deg: f64,
+        foot_m: f64,
+        height_m: f64,
+        pitch_deg: f64,
+        roll_deg: f64,
+    ) -> Self {
         let t = slope_deg.to_radians();
         let ground = Surface {
             normal: Vector3::z(),

@@ -33,8 +33,8 @@ pub mod statistical_outlier;
 
 pub use cloud::CloudView;
 pub use config::{
-    parse_method, ConfigError, CumulativeConfig, EstimatorConfig, KmeansConfig, NormalsConfig, OutlierConfig,
-    PassThroughConfig, RansacConfig, SelectionConfig,
+    parse_method, ConfigError, CumulativeConfig, EstimatorConfig, KmeansConfig, NormalsConfig,
+    OutlierConfig, PassThroughConfig, RansacConfig, SelectionConfig,
 };
 pub use estimator::{Estimate, Estimator, PlaneEstimate, StageTimings};
 pub use slope_ipc_types::{EstimateStatus, SlopeMethod};

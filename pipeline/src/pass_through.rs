@@ -2,24 +2,36 @@
 //! `max_points` (10,000) points is cut down by keeping only the points inside
 //! a range along one axis.
 //!
-//! **Axis and range.** The paper names neither. We filter along the camera's
-//! optical axis (depth z) and keep the range `[z_min, z_cut]` nearest the
-//! camera, with `z_cut` the depth of the `max_points`-th nearest point (ties
-//! broken by pixel order, so exactly `max_points` remain). Kinect depth noise
-//! grows with the square of the depth, so the nearest part of a plane is its
-//! best-measured part, and a contiguous slab keeps every point's
-//! neighbourhood intact for the normal estimation (a random or strided
-//! subsample would thin it). The cut is an O(n) selection, not a sort.
+//! **Axis and range.** The paper names neither. We filter along the
+//! elevation of each point's viewing ray, `y / z` (the image row, as the
+//! cloud is organised), and keep the band of exactly `max_points` points
+//! centred (in rank) on the plane's median elevation: as many points above
+//! the median as below it (ties broken by pixel order).
+//!
+//! - *Why not depth or height?* Depth noise moves a point along its ray, so
+//!   every metric coordinate (x, y, z) carries the noise, and cutting a range
+//!   of a noisy coordinate keeps the points whose noise pushed them inside:
+//!   near the cut the kept points are biased towards the range, which tilts
+//!   the surface they describe (1 degree on a wall band on `slope-synth`
+//!   recordings). The ray's direction `y / z` carries no depth noise, so the
+//!   cut selects pixels, not noise.
+//! - *Why the middle?* A plane's first and last rows are where it meets other
+//!   planes (a ramp's foot, where multipath and mixed pixels bend the
+//!   measured surface) or ends in clutter; the middle band is the plane
+//!   itself. A contiguous band also keeps every point's neighbourhood intact
+//!   for the normal estimation (a random or strided subsample would thin it).
+//!
+//! The cut is two O(n) selections, not a sort.
 
 use slope_ipc_types::CloudPoint;
 
 /// The range a pass-through kept.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PassThroughRange {
-    /// Kept depth range along the optical axis, metres (both NaN when the
-    /// input was empty).
-    pub z_min_m: f64,
-    pub z_max_m: f64,
+    /// Kept range of the ray elevation `y / z` (both NaN when the input was
+    /// empty).
+    pub min_elevation: f64,
+    pub max_elevation: f64,
     /// True when points were removed.
     pub cut: bool,
 }
@@ -36,8 +48,9 @@ impl PassThrough {
         Self::default()
     }
 
-    /// Keeps at most `max_points` of `members` (pixel indices into `points`)
-    /// nearest the camera along z. Members without a reading are dropped.
+    /// Keeps at most `max_points` of `members` (pixel indices into `points`):
+    /// the band of ray elevations `y / z` centred on their median. Members
+    /// without a reading are dropped.
     /// Returns the kept indices (in pixel order) and the range.
     pub fn filter(
         &mut self,
@@ -48,8 +61,8 @@ impl PassThrough {
         self.keyed.clear();
         for &i in members {
             if let Some(p) = points.get(i as usize) {
-                if p.z_m.is_finite() && p.x_m.is_finite() && p.y_m.is_finite() {
-                    self.keyed.push((p.z_m, i));
+                if p.z_m.is_finite() && p.x_m.is_finite() && p.y_m.is_finite() && p.z_m != 0.0 {
+                    self.keyed.push((p.y_m / p.z_m, i));
                 }
             }
         }
@@ -59,7 +72,13 @@ impl PassThrough {
             if max_points == 0 {
                 self.keyed.clear();
             } else {
-                self.keyed.select_nth_unstable_by(max_points - 1, by_depth);
+                let lo = (self.keyed.len() - max_points) / 2;
+                if lo > 0 {
+                    self.keyed.select_nth_unstable_by(lo, by_depth);
+                }
+                let upper = &mut self.keyed[lo..];
+                upper.select_nth_unstable_by(max_points - 1, by_depth);
+                self.keyed.drain(..lo);
                 self.keyed.truncate(max_points);
             }
         }
@@ -75,8 +94,8 @@ impl PassThrough {
         (
             &self.kept,
             PassThroughRange {
-                z_min_m: lo,
-                z_max_m: hi,
+                min_elevation: lo,
+                max_elevation: hi,
                 cut,
             },
         )
@@ -87,36 +106,54 @@ impl PassThrough {
 mod tests {
     use super::*;
 
-    fn points_at_depths(depths: &[f32]) -> Vec<CloudPoint> {
-        depths
+    /// Points at 2 m depth whose rays have the given elevations `y / z`.
+    fn points_at_elevations(elevations: &[f32]) -> Vec<CloudPoint> {
+        elevations
             .iter()
-            .map(|&z| CloudPoint { x_m: 0.0, y_m: 0.0, z_m: z, rgb: 0 })
+            .map(|&e| CloudPoint {
+                x_m: 0.1,
+                y_m: 2.0 * e,
+                z_m: 2.0,
+                rgb: 0,
+            })
             .collect()
     }
 
     #[test]
-    fn keeps_the_nearest_slab_exactly() {
-        // Depths 0..100 shuffled deterministically.
-        let depths: Vec<f32> = (0..100).map(|i| ((i * 37) % 100) as f32 * 0.01 + 1.0).collect();
-        let pts = points_at_depths(&depths);
+    fn keeps_the_median_band_exactly() {
+        // Elevations 0..1 shuffled deterministically.
+        let depths: Vec<f32> = (0..100).map(|i| ((i * 37) % 100) as f32 * 0.01).collect();
+        let pts = points_at_elevations(&depths);
         let members: Vec<u32> = (0..100).collect();
         let mut pt = PassThrough::new();
         let (kept, range) = pt.filter(&pts, &members, 30);
         assert_eq!(kept.len(), 30);
         assert!(range.cut);
-        assert!((range.z_min_m - 1.0).abs() < 1e-6);
-        assert!((range.z_max_m - 1.29).abs() < 1e-5);
-        // Brute force: the kept set is exactly the 30 smallest depths.
-        let mut sorted: Vec<(f32, u32)> = members.iter().map(|&i| (depths[i as usize], i)).collect();
+        // 100 points, 30 kept: ranks 35..65, elevations 0.35..0.64.
+        assert!((range.min_elevation - 0.35).abs() < 1e-6, "{range:?}");
+        assert!((range.max_elevation - 0.64).abs() < 1e-5, "{range:?}");
+        // Brute force: the kept set is exactly ranks 35..65 of a full sort.
+        // Noise along the rays (any depth) changes nothing.
+        let mut noisy = pts.clone();
+        for (k, p) in noisy.iter_mut().enumerate() {
+            let s = 1.0 + 0.01 * (k % 7) as f32;
+            p.x_m *= s;
+            p.y_m *= s;
+            p.z_m *= s;
+        }
+        let mut pt2 = PassThrough::new();
+        assert_eq!(pt2.filter(&noisy, &members, 30).0, kept);
+        let mut sorted: Vec<(f32, u32)> =
+            members.iter().map(|&i| (depths[i as usize], i)).collect();
         sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let mut want: Vec<u32> = sorted[..30].iter().map(|x| x.1).collect();
+        let mut want: Vec<u32> = sorted[35..65].iter().map(|x| x.1).collect();
         want.sort_unstable();
         assert_eq!(kept, &want[..]);
     }
 
     #[test]
     fn small_planes_pass_unchanged_and_ties_are_capped() {
-        let pts = points_at_depths(&[2.0; 50]);
+        let pts = points_at_elevations(&[2.0; 50]);
         let members: Vec<u32> = (0..50).collect();
         let mut pt = PassThrough::new();
         let (kept, range) = pt.filter(&pts, &members, 50);

@@ -311,7 +311,8 @@ mod tests {
                 )
             };
             let (a, b, c) = (axis(&mut rng), axis(&mut rng), axis(&mut rng));
-            let m: Matrix3<f64> = (a * a.transpose() + b * b.transpose()
+            let m: Matrix3<f64> = (a * a.transpose()
+                + b * b.transpose()
                 + c * c.transpose() * rng.random_range(0.0..0.05))
                 * scale;
             let (oracle, _) = smallest_eigenvector(&m).unwrap();

@@ -91,10 +91,12 @@ pub fn select_planes(
                 .total_cmp(&angle_between_deg(&planes[b].plane.normal, &reference))
         })
     } else {
-        candidates
-            .iter()
-            .copied()
-            .max_by(|&a, &b| planes[a].bottom_inliers.cmp(&planes[b].bottom_inliers).then(b.cmp(&a)))
+        candidates.iter().copied().max_by(|&a, &b| {
+            planes[a]
+                .bottom_inliers
+                .cmp(&planes[b].bottom_inliers)
+                .then(b.cmp(&a))
+        })
     };
     let ground = match first {
         Some(g) => {
@@ -102,7 +104,9 @@ pub fn select_planes(
             let best = candidates
                 .iter()
                 .copied()
-                .filter(|&k| angle_between_deg(&planes[k].plane.normal, &gn) <= config.parallel_tolerance_deg)
+                .filter(|&k| {
+                    angle_between_deg(&planes[k].plane.normal, &gn) <= config.parallel_tolerance_deg
+                })
                 .max_by(|&a, &b| planes[a].inliers.cmp(&planes[b].inliers).then(b.cmp(&a)))
                 .unwrap_or(g);
             GroundSource::Plane(best)
@@ -125,10 +129,16 @@ pub fn select_planes(
             }
             let horizontal = n - up * n.dot(&up);
             let h = horizontal.norm();
-            h > 1e-9 && horizontal.dot(&forward).abs() >= cos_heading * h && planes[k].centroid.dot(&forward) > 0.0
+            h > 1e-9
+                && horizontal.dot(&forward).abs() >= cos_heading * h
+                && planes[k].centroid.dot(&forward) > 0.0
         })
         .collect();
-    let support = inclined.iter().map(|&k| planes[k].inliers).max().unwrap_or(0);
+    let support = inclined
+        .iter()
+        .map(|&k| planes[k].inliers)
+        .max()
+        .unwrap_or(0);
     let chosen = inclined
         .iter()
         .copied()
@@ -198,8 +208,15 @@ mod tests {
         // Push the centroid into view along the surface's forward extent.
         let ahead = scene.to_camera(&Vector3::new(0.0, 1.0, 0.0));
         let centroid = c + ahead * 0.5;
-        let plane = Plane::from_point_normal(&c, &n).unwrap().oriented_towards(&Vector3::zeros());
-        PlaneSummary { plane, inliers, bottom_inliers: bottom, centroid }
+        let plane = Plane::from_point_normal(&c, &n)
+            .unwrap()
+            .oriented_towards(&Vector3::zeros());
+        PlaneSummary {
+            plane,
+            inliers,
+            bottom_inliers: bottom,
+            centroid,
+        }
     }
 
     #[test]
@@ -219,7 +236,10 @@ mod tests {
             assert_eq!(sel.inclined, 3);
             let angle = angle_between_deg(&planes[3].plane.normal, &sel.up);
             assert!((angle - slope.abs()).abs() < 1e-9);
-            assert_eq!(slope_sign(&planes[3].plane.normal, &sel.forward), slope.signum());
+            assert_eq!(
+                slope_sign(&planes[3].plane.normal, &sel.forward),
+                slope.signum()
+            );
             // Same without a mount: the ground is at the bottom of the image.
             let sel = select_planes(&planes, None, &SelectionConfig::default()).unwrap();
             assert_eq!(sel.ground, GroundSource::Plane(1));
@@ -251,9 +271,12 @@ mod tests {
 
     #[test]
     fn distance_along_the_axis() {
-        let plane = Plane::from_point_normal(&Vector3::new(0.0, 0.0, 3.0), &Vector3::new(0.0, -1.0, -1.0)).unwrap();
+        let plane =
+            Plane::from_point_normal(&Vector3::new(0.0, 0.0, 3.0), &Vector3::new(0.0, -1.0, -1.0))
+                .unwrap();
         assert!((axis_distance(&plane) - 3.0).abs() < 1e-12);
-        let parallel = Plane::from_point_normal(&Vector3::new(0.0, 1.0, 0.0), &Vector3::y()).unwrap();
+        let parallel =
+            Plane::from_point_normal(&Vector3::new(0.0, 1.0, 0.0), &Vector3::y()).unwrap();
         assert!(axis_distance(&parallel).is_nan());
     }
 }

@@ -197,7 +197,8 @@ impl PlaneSegmenter {
                     continue;
                 }
                 let n = if need_normals {
-                    grid_normal(cloud, keep, u, v, radius).unwrap_or_else(|| Vector3::repeat(f64::NAN))
+                    grid_normal(cloud, keep, u, v, radius)
+                        .unwrap_or_else(|| Vector3::repeat(f64::NAN))
                 } else {
                     Vector3::repeat(f64::NAN)
                 };
@@ -248,9 +249,11 @@ impl PlaneSegmenter {
             if a == b || b == c || a == c {
                 continue;
             }
-            let Some(plane) =
-                Plane::from_three_points(&self.sample_xyz[a], &self.sample_xyz[b], &self.sample_xyz[c])
-            else {
+            let Some(plane) = Plane::from_three_points(
+                &self.sample_xyz[a],
+                &self.sample_xyz[b],
+                &self.sample_xyz[c],
+            ) else {
                 continue;
             };
             if let Some(cg) = cos_gate {
@@ -266,7 +269,13 @@ impl PlaneSegmenter {
                 .iter()
                 .filter(|&&k| {
                     let k = k as usize;
-                    is_inlier(&plane, &self.sample_xyz[k], &self.sample_normal[k], t, cos_gate)
+                    is_inlier(
+                        &plane,
+                        &self.sample_xyz[k],
+                        &self.sample_normal[k],
+                        t,
+                        cos_gate,
+                    )
                 })
                 .count();
             if best.as_ref().is_none_or(|(s, _)| score > *s) {
@@ -275,7 +284,11 @@ impl PlaneSegmenter {
                 let p_good = w * w * w;
                 if p_good > 0.0 && p_good < 1.0 {
                     let n_req = log_fail / (1.0 - p_good).ln();
-                    needed = if n_req.is_finite() { n_req.ceil() as usize } else { needed };
+                    needed = if n_req.is_finite() {
+                        n_req.ceil() as usize
+                    } else {
+                        needed
+                    };
                 } else if p_good >= 1.0 {
                     needed = 0;
                 }
@@ -343,7 +356,13 @@ impl PlaneSegmenter {
 }
 
 #[inline]
-fn is_inlier(plane: &Plane, p: &Vector3<f64>, n: &Vector3<f64>, t: f64, cos_gate: Option<f64>) -> bool {
+fn is_inlier(
+    plane: &Plane,
+    p: &Vector3<f64>,
+    n: &Vector3<f64>,
+    t: f64,
+    cos_gate: Option<f64>,
+) -> bool {
     if plane.signed_distance(p).abs() > t {
         return false;
     }
@@ -366,7 +385,10 @@ mod tests {
         let keep: Vec<bool> = cloud.points.iter().map(|p| p.is_valid()).collect();
         let mut seg = PlaneSegmenter::new();
         let mut rng = ChaCha8Rng::seed_from_u64(0);
-        let cfg = RansacConfig { min_plane_points: 200, ..RansacConfig::default() };
+        let cfg = RansacConfig {
+            min_plane_points: 200,
+            ..RansacConfig::default()
+        };
         let planes = seg.segment(&cloud.view(), &keep, &cfg, &mut rng).to_vec();
         (cloud, planes)
     }
@@ -378,8 +400,12 @@ mod tests {
         assert!(planes.len() >= 2, "{}", planes.len());
         let up = scene.to_camera(&Vector3::z());
         let ramp = scene.to_camera(&scene.surfaces[1].normal);
-        let ground = planes.iter().find(|p| angle_between_deg(&p.plane.normal, &up) < 0.01);
-        let incl = planes.iter().find(|p| angle_between_deg(&p.plane.normal, &ramp) < 0.01);
+        let ground = planes
+            .iter()
+            .find(|p| angle_between_deg(&p.plane.normal, &up) < 0.01);
+        let incl = planes
+            .iter()
+            .find(|p| angle_between_deg(&p.plane.normal, &ramp) < 0.01);
         let (ground, incl) = (ground.expect("ground"), incl.expect("ramp"));
         // Ground: n.p + d = 0 with d = camera height.
         assert!((ground.plane.d - 0.5).abs() < 1e-4, "{}", ground.plane.d);
@@ -388,7 +414,10 @@ mod tests {
         assert_eq!(ground.inliers.len() + incl.inliers.len(), measured);
         for &i in &ground.inliers {
             let p = to_vec3(&cloud.points[i as usize]);
-            assert!(ground.plane.signed_distance(&p).abs() <= incl.plane.signed_distance(&p).abs() + 1e-9);
+            assert!(
+                ground.plane.signed_distance(&p).abs()
+                    <= incl.plane.signed_distance(&p).abs() + 1e-9
+            );
         }
     }
 
@@ -398,12 +427,18 @@ mod tests {
         let (_, planes) = segment(&scene, 0.0015);
         let ramp = scene.to_camera(&scene.surfaces[1].normal);
         let up = scene.to_camera(&Vector3::z());
-        assert!(planes.iter().any(|p| angle_between_deg(&p.plane.normal, &ramp) < 0.3));
-        assert!(planes.iter().any(|p| angle_between_deg(&p.plane.normal, &up) < 0.3));
+        assert!(planes
+            .iter()
+            .any(|p| angle_between_deg(&p.plane.normal, &ramp) < 0.3));
+        assert!(planes
+            .iter()
+            .any(|p| angle_between_deg(&p.plane.normal, &up) < 0.3));
         for wall in [&scene.surfaces[2], &scene.surfaces[3]] {
             let n = scene.to_camera(&wall.normal);
             assert!(
-                planes.iter().any(|p| angle_between_deg(&p.plane.normal, &n) < 1.0),
+                planes
+                    .iter()
+                    .any(|p| angle_between_deg(&p.plane.normal, &n) < 1.0),
                 "wall {n:?} not found"
             );
         }
@@ -419,7 +454,11 @@ mod tests {
         let keep = vec![false; cloud.points.len()];
         let mut seg = PlaneSegmenter::new();
         let mut rng = ChaCha8Rng::seed_from_u64(0);
-        assert!(seg.segment(&cloud.view(), &keep, &RansacConfig::default(), &mut rng).is_empty());
-        assert!(seg.segment(&cloud.view(), &[], &RansacConfig::default(), &mut rng).is_empty());
+        assert!(seg
+            .segment(&cloud.view(), &keep, &RansacConfig::default(), &mut rng)
+            .is_empty());
+        assert!(seg
+            .segment(&cloud.view(), &[], &RansacConfig::default(), &mut rng)
+            .is_empty());
     }
 }

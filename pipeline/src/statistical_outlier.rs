@@ -5,17 +5,23 @@
 //! **Shortcut.** The paper (like PCL's `StatisticalOutlierRemoval`) finds the
 //! m = 20 nearest neighbours with a k-d tree over all points, 0.3-0.6 s on a
 //! 217k-point Kinect v2 frame. The cloud is organised, so we take the
-//! candidates from the pixel grid instead: the `m` nearest (in 3D) of the
-//! measured pixels in the smallest square window holding at least `m`
-//! others, 5x5 for m = 20. On a surface, the grid neighbours *are* the
-//! nearest points; flying pixels and speckle sit far from every pixel around
-//! them and get a large statistic either way. A pixel with fewer than `m`
-//! measured pixels in its window looks in a window two pixels wider; a pixel
-//! with fewer than `m` measured pixels even there is isolated (its m-NN are
-//! at least 4 pixel rays away) and is dropped. The distances of a whole row
-//! are computed per window offset in structure-of-arrays form, which the
-//! compiler vectorises; the `W - m` largest of the `W` window distances are
-//! kept in a small sorted register file, so no per-pixel sort is needed.
+//! neighbours from the pixel grid instead. For m = 20 they are the 20 pixels
+//! nearest on the grid (the 5x5 window without its corners); each pair's
+//! distance is computed once for both pixels, a row at a time in
+//! structure-of-arrays form that the compiler vectorises. On a locally flat
+//! surface the map from pixels to 3D is affine, and when its stretch runs
+//! along an image axis (floors, ramps and walls seen by an upright camera)
+//! the 20 pixel-nearest points *are* the 20 nearest in 3D; the tests check
+//! this against a k-d tree. Flying pixels and speckle are far from every
+//! pixel around them and get a large statistic either way. The one
+//! difference: at a depth edge the grid also counts the pixels across the
+//! edge, so edge points get a larger statistic and are dropped a little more
+//! readily than with a k-d tree (>= 98 % of verdicts agree on the test
+//! scenes); that only trims the borders of planes. A pixel with fewer than m
+//! measured grid neighbours takes the m nearest measured pixels of the 9x9
+//! window (exactly), and one with fewer than m even there is isolated and
+//! dropped. For other m the candidates are the smallest square window with
+//! at least m others, of which the m nearest are taken.
 
 use crate::cloud::CloudView;
 use crate::config::OutlierConfig;
@@ -43,6 +49,8 @@ pub struct StatisticalOutlierFilter {
     ys: Vec<f32>,
     zs: Vec<f32>,
     mean_distance: Vec<f32>,
+    sum: Vec<f32>,
+    count: Vec<f32>,
     row_sum: Vec<f32>,
     row_count: Vec<f32>,
     row_value: Vec<f32>,
@@ -93,6 +101,99 @@ impl StatisticalOutlierFilter {
         self.load_padded(cloud, r_fb);
         self.mean_distance.clear();
         self.mean_distance.resize(n, f32::NAN);
+        if m == 20 {
+            self.grid_disc_statistic(w, h, r_fb, m);
+        } else {
+            self.square_window_statistic(w, h, r, r_fb, m);
+        }
+        self.threshold(config, keep)
+    }
+
+    /// The m = 20 fast path: each pixel's 20 grid-nearest neighbours, every
+    /// pair's distance computed once.
+    fn grid_disc_statistic(&mut self, w: usize, h: usize, pad: usize, m: usize) {
+        let pw = w + 2 * pad;
+        let len = pw * (h + 2 * pad);
+        self.sum.clear();
+        self.sum.resize(len, 0.0);
+        self.count.clear();
+        self.count.resize(len, 0.0);
+        self.row_value.resize(w, 0.0);
+        // Half of the 20 offsets with du^2 + dv^2 <= 5; the other half is
+        // the same pairs seen from the other pixel.
+        const HALF_DISC: [(isize, isize); 10] = [
+            (1, 0),
+            (2, 0),
+            (-2, 1),
+            (-1, 1),
+            (0, 1),
+            (1, 1),
+            (2, 1),
+            (-1, 2),
+            (0, 2),
+            (1, 2),
+        ];
+        for v in 0..h {
+            let centre = (v + pad) * pw + pad;
+            for &(du, dv) in &HALF_DISC {
+                let other = (centre as isize + dv * pw as isize + du) as usize;
+                self.accumulate_pair(centre, other, w);
+            }
+        }
+        for v in 0..h {
+            let centre = (v + pad) * pw + pad;
+            for u in 0..w {
+                let c = centre + u;
+                if !self.zs[c].is_finite() {
+                    continue;
+                }
+                self.mean_distance[v * w + u] = if self.count[c] as usize >= m {
+                    self.sum[c] / m as f32
+                } else {
+                    self.fallback(c, pw, pad, m)
+                };
+            }
+        }
+    }
+
+    /// Adds the distances between row `centre..centre+w` and the row at
+    /// `other` to both ends' sums and counts.
+    #[inline(never)]
+    fn accumulate_pair(&mut self, centre: usize, other: usize, w: usize) {
+        let value = &mut self.row_value[..w];
+        {
+            let (cx, cy, cz) = (
+                &self.xs[centre..centre + w],
+                &self.ys[centre..centre + w],
+                &self.zs[centre..centre + w],
+            );
+            let (ox, oy, oz) = (
+                &self.xs[other..other + w],
+                &self.ys[other..other + w],
+                &self.zs[other..other + w],
+            );
+            for u in 0..w {
+                let dx = cx[u] - ox[u];
+                let dy = cy[u] - oy[u];
+                let dz = cz[u] - oz[u];
+                value[u] = (dx * dx + dy * dy + dz * dz).sqrt();
+            }
+        }
+        for (base, value) in [(centre, &*value), (other, &*value)] {
+            let sum = &mut self.sum[base..base + w];
+            let count = &mut self.count[base..base + w];
+            for u in 0..w {
+                let d = value[u];
+                let valid = d == d;
+                sum[u] += if valid { d } else { 0.0 };
+                count[u] += if valid { 1.0 } else { 0.0 };
+            }
+        }
+    }
+
+    /// The general path: the m nearest of the smallest square window with
+    /// at least m other pixels.
+    fn square_window_statistic(&mut self, w: usize, h: usize, r: usize, r_fb: usize, m: usize) {
         let pw = w + 2 * r_fb;
         let drop = (2 * r + 1) * (2 * r + 1) - 1 - m;
         self.row_sum.resize(w, 0.0);
@@ -134,6 +235,10 @@ impl StatisticalOutlierFilter {
                 self.mean_distance[v * w + u] = d;
             }
         }
+    }
+
+    /// Mean and standard deviation of the statistic, and the verdicts.
+    fn threshold(&mut self, config: &OutlierConfig, keep: &mut [bool]) -> OutlierStats {
         // Statistics over the points with a finite statistic (isolated
         // points are outliers whatever the threshold).
         let (mut count, mut sum, mut sum_sq) = (0usize, 0.0f64, 0.0f64);
@@ -292,7 +397,9 @@ mod tests {
         for (i, p) in pts.iter().enumerate().step_by(97) {
             let mut d: Vec<f64> = pts
                 .iter()
-                .map(|q| ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt())
+                .map(|q| {
+                    ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
+                })
                 .collect();
             d.sort_by(f64::total_cmp);
             let linear = d[1..21].iter().sum::<f64>() / 20.0;
@@ -308,21 +415,28 @@ mod tests {
         let scene = Scene::wall_facing(2.0);
         let cloud = SceneCloud::render_with_intrinsics(&scene, 40, 30, 365.0, 0.0, 1);
         let view = cloud.view();
-        let mut filter = StatisticalOutlierFilter::new();
-        let mut keep = Vec::new();
-        filter.filter(&view, &OutlierConfig::default(), &mut keep);
         let pts: Vec<[f64; 3]> = cloud.measured_points();
         assert_eq!(pts.len(), 40 * 30);
-        let oracle = brute_force_statistic(&pts, 20);
-        for v in 2..28 {
-            for u in 2..38 {
-                let i = v * 40 + u;
-                let ours = f64::from(filter.mean_distances()[i]);
-                assert!(
-                    (ours - oracle[i]).abs() < 1e-4 * oracle[i],
-                    "pixel ({u},{v}): {ours} vs {}",
-                    oracle[i]
-                );
+        // m = 20: the grid disc; m = 8 and 24: the general square-window path.
+        for m in [20, 8, 24] {
+            let mut filter = StatisticalOutlierFilter::new();
+            let mut keep = Vec::new();
+            let config = OutlierConfig {
+                neighbours: m,
+                ..OutlierConfig::default()
+            };
+            filter.filter(&view, &config, &mut keep);
+            let oracle = brute_force_statistic(&pts, m);
+            for v in 2..28 {
+                for u in 2..38 {
+                    let i = v * 40 + u;
+                    let ours = f64::from(filter.mean_distances()[i]);
+                    assert!(
+                        (ours - oracle[i]).abs() < 1e-4 * oracle[i],
+                        "m {m} pixel ({u},{v}): {ours} vs {}",
+                        oracle[i]
+                    );
+                }
             }
         }
     }
@@ -375,7 +489,10 @@ mod tests {
     fn empty_and_invalid_clouds_keep_nothing() {
         let scene = Scene::ramp(5.0);
         let mut cloud = SceneCloud::render(&scene, 16, 12, 0.0, 1);
-        cloud.points.iter_mut().for_each(|p| *p = slope_ipc_types::CloudPoint::INVALID);
+        cloud
+            .points
+            .iter_mut()
+            .for_each(|p| *p = slope_ipc_types::CloudPoint::INVALID);
         let mut filter = StatisticalOutlierFilter::new();
         let mut keep = Vec::new();
         let stats = filter.filter(&cloud.view(), &OutlierConfig::default(), &mut keep);

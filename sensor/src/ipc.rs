@@ -74,8 +74,7 @@ pub enum PublishFrameError {
 /// Creates the process's iceoryx2 node. Signal handling is left to the
 /// binaries (ctrlc), so iceoryx2 installs no handlers of its own.
 pub fn create_node(name: &str) -> Result<Node<ipc::Service>, IpcError> {
-    let node_name =
-        NodeName::new(name).map_err(|e| IpcError::new("name the node", name, e))?;
+    let node_name = NodeName::new(name).map_err(|e| IpcError::new("name the node", name, e))?;
     let node = NodeBuilder::new()
         .name(&node_name)
         .signal_handling_mode(SignalHandlingMode::Disabled)
@@ -107,7 +106,8 @@ fn cloud_service(node: &Node<ipc::Service>, name: &str) -> Result<CloudService, 
         .max_publishers(1)
         .max_subscribers(CLOUD_MAX_SUBSCRIBERS)
         .subscriber_max_buffer_size(CLOUD_SUBSCRIBER_BUFFER)
-        .subscriber_max_borrowed_samples(1)
+        // The newest cloud so far plus the one just received.
+        .subscriber_max_borrowed_samples(2)
         .history_size(0)
         .enable_safe_overflow(true)
         .open_or_create()

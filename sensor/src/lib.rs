@@ -3,8 +3,9 @@
 //! path into iceoryx2 shared memory.
 
 pub mod ipc;
+#[cfg(feature = "kinect2")]
+pub mod kinect2;
 pub mod projection;
+pub mod publish;
 pub mod recording;
 pub mod source;
-pub mod publish;
-#[cfg(feature = "kinect2")] pub mod kinect2;

@@ -96,9 +96,7 @@ pub enum PublishError {
     Source(#[from] SourceError),
     #[error(transparent)]
     Publish(#[from] PublishFrameError),
-    #[error(
-        "only {connected} of {wanted} subscribers connected to '{service}' within {waited:?}"
-    )]
+    #[error("only {connected} of {wanted} subscribers connected to '{service}' within {waited:?}")]
     NoSubscribers {
         service: String,
         connected: usize,

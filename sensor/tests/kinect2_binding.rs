@@ -34,7 +34,10 @@ fn enumeration_finds_no_device() {
         return;
     }
     let context = Context::new().expect("libfreenect2 context");
-    assert_eq!(context.enumerate().expect("enumerate"), Vec::<String>::new());
+    assert_eq!(
+        context.enumerate().expect("enumerate"),
+        Vec::<String>::new()
+    );
     // Enumerating again (a fresh USB scan) is just as clean.
     assert!(context.enumerate().expect("enumerate again").is_empty());
 }
@@ -68,7 +71,10 @@ fn opening_without_a_device_fails_cleanly() {
 
 #[test]
 fn unavailable_pipelines_are_refused_by_name() {
-    assert!(Pipeline::Cpu.is_available(), "the CPU pipeline is always built");
+    assert!(
+        Pipeline::Cpu.is_available(),
+        "the CPU pipeline is always built"
+    );
     assert!(Pipeline::Default.is_available());
     let context = Context::new().expect("libfreenect2 context");
     for pipeline in Pipeline::ALL.into_iter().filter(|p| !p.is_available()) {
@@ -179,7 +185,7 @@ fn one_to_one_color_params() -> ColorParams {
 fn synthetic_depth() -> Vec<f32> {
     (0..DEPTH_PIXELS)
         .map(|i| {
-            if i % 97 == 0 {
+            if i.is_multiple_of(97) {
                 0.0
             } else {
                 1000.0 + (i % 1500) as f32
@@ -232,8 +238,8 @@ fn undistortion_follows_the_brown_model() {
             let (dx2, dy2) = (dx * dx, dy * dy);
             let r2 = dx2 + dy2;
             let dxdy2 = 2.0 * dx * dy;
-            let kr = 1.0
-                + ((f64::from(ir.k3) * r2 + f64::from(ir.k2)) * r2 + f64::from(ir.k1)) * r2;
+            let kr =
+                1.0 + ((f64::from(ir.k3) * r2 + f64::from(ir.k2)) * r2 + f64::from(ir.k1)) * r2;
             let mx = f64::from(ir.fx)
                 * (dx * kr + f64::from(ir.p2) * (r2 + 2.0 * dx2) + f64::from(ir.p1) * dxdy2)
                 + f64::from(ir.cx);
@@ -241,12 +247,13 @@ fn undistortion_follows_the_brown_model() {
                 * (dy * kr + f64::from(ir.p1) * (r2 + 2.0 * dy2) + f64::from(ir.p2) * dxdy2)
                 + f64::from(ir.cy);
             let (ix, iy) = ((mx + 0.5).floor(), (my + 0.5).floor());
-            let expected = if ix < 0.0 || iy < 0.0 || ix >= DEPTH_WIDTH as f64 || iy >= DEPTH_HEIGHT as f64 {
-                zeros += 1;
-                0.0
-            } else {
-                depth[iy as usize * DEPTH_WIDTH + ix as usize]
-            };
+            let expected =
+                if ix < 0.0 || iy < 0.0 || ix >= DEPTH_WIDTH as f64 || iy >= DEPTH_HEIGHT as f64 {
+                    zeros += 1;
+                    0.0
+                } else {
+                    depth[iy as usize * DEPTH_WIDTH + ix as usize]
+                };
             if undistorted[y * DEPTH_WIDTH + x] != expected {
                 mismatches += 1;
             }
@@ -256,7 +263,10 @@ fn undistortion_follows_the_brown_model() {
     assert!(zeros > 100, "only {zeros} pixels map outside");
     // ... and libfreenect2 (f32 arithmetic) agrees with the f64 oracle
     // except where a coordinate sits within rounding of a pixel boundary.
-    assert!(mismatches < DEPTH_PIXELS / 1000, "{mismatches} pixels differ");
+    assert!(
+        mismatches < DEPTH_PIXELS / 1000,
+        "{mismatches} pixels differ"
+    );
 }
 
 #[test]
@@ -269,16 +279,26 @@ fn registration_maps_colour_through_the_calibration_polynomial() {
     let color: Vec<u8> = (0..(COLOR_WIDTH * COLOR_HEIGHT) as u32)
         .flat_map(u32::to_ne_bytes)
         .collect();
-    let depth_view =
-        FrameView::from_bytes(DEPTH_WIDTH, DEPTH_HEIGHT, 4, FrameFormat::Float, &depth_bytes)
-            .expect("depth view");
-    let color_view =
-        FrameView::from_bytes(COLOR_WIDTH, COLOR_HEIGHT, 4, FrameFormat::Bgrx, &color)
-            .expect("colour view");
+    let depth_view = FrameView::from_bytes(
+        DEPTH_WIDTH,
+        DEPTH_HEIGHT,
+        4,
+        FrameFormat::Float,
+        &depth_bytes,
+    )
+    .expect("depth view");
+    let color_view = FrameView::from_bytes(COLOR_WIDTH, COLOR_HEIGHT, 4, FrameFormat::Bgrx, &color)
+        .expect("colour view");
     let mut undistorted = vec![-1.0f32; DEPTH_PIXELS];
     let mut registered = vec![u32::MAX; DEPTH_PIXELS];
     registration
-        .apply(&color_view, &depth_view, &mut undistorted, &mut registered, false)
+        .apply(
+            &color_view,
+            &depth_view,
+            &mut undistorted,
+            &mut registered,
+            false,
+        )
         .expect("apply");
     assert_eq!(undistorted, depth);
     for y in 0..DEPTH_HEIGHT {
@@ -308,11 +328,22 @@ fn registration_maps_colour_through_the_calibration_polynomial() {
         })
         .collect();
     let scene_bytes = as_bytes(&scene);
-    let scene_view =
-        FrameView::from_bytes(DEPTH_WIDTH, DEPTH_HEIGHT, 4, FrameFormat::Float, &scene_bytes)
-            .expect("scene view");
+    let scene_view = FrameView::from_bytes(
+        DEPTH_WIDTH,
+        DEPTH_HEIGHT,
+        4,
+        FrameFormat::Float,
+        &scene_bytes,
+    )
+    .expect("scene view");
     registration
-        .apply(&color_view, &scene_view, &mut undistorted, &mut registered, true)
+        .apply(
+            &color_view,
+            &scene_view,
+            &mut undistorted,
+            &mut registered,
+            true,
+        )
         .expect("apply with filter");
     let mut hidden = 0;
     for y in 0..DEPTH_HEIGHT {

@@ -65,12 +65,19 @@ fn assert_exits_zero_within(proc: &mut Proc, within: Duration) {
             proc.name
         )
     });
-    assert!(status.success(), "{} exited with {status}\n{diagnostics}", proc.name);
+    assert!(
+        status.success(),
+        "{} exited with {status}\n{diagnostics}",
+        proc.name
+    );
 }
 
 fn truth_of(dir: &Path) -> f64 {
     let rec = Recording::open(dir).expect("bundled recording opens");
-    rec.meta().truth.slope_deg.expect("bundled recording has truth")
+    rec.meta()
+        .truth
+        .slope_deg
+        .expect("bundled recording has truth")
 }
 
 #[test]
@@ -109,9 +116,20 @@ fn every_frame_gives_one_estimate_in_order_within_a_degree() {
         .iter()
         .map(|e| e["frame"].as_u64().expect("frame is a number"))
         .collect();
-    assert_eq!(indices, (0..frames as u64).collect::<Vec<_>>(), "frame order");
+    assert_eq!(
+        indices,
+        (0..frames as u64).collect::<Vec<_>>(),
+        "frame order"
+    );
     for e in &estimates {
-        for key in ["frame", "timestamp_ns", "status", "slope_deg", "std_deg", "latency_ms"] {
+        for key in [
+            "frame",
+            "timestamp_ns",
+            "status",
+            "slope_deg",
+            "std_deg",
+            "latency_ms",
+        ] {
             assert!(e.get(key).is_some(), "missing {key} in {e}");
         }
         assert_eq!(e["status"], "ok", "{e}");
@@ -267,7 +285,11 @@ fn a_missing_recording_is_a_clear_error_and_a_nonzero_exit() {
     let missing = std::env::temp_dir().join(format!("{prefix}-does-not-exist"));
     let mut replay = Proc::spawn(
         "slope-replay",
-        [missing.to_str().expect("utf-8 path"), "--service-prefix", &prefix],
+        [
+            missing.to_str().expect("utf-8 path"),
+            "--service-prefix",
+            &prefix,
+        ],
     );
     let status = replay.wait_exit(deadline(10.0)).expect("replay exits");
     assert!(!status.success(), "replay of a missing recording succeeded");

@@ -58,7 +58,8 @@ pub fn unmirror_depth(undistorted: &[f32], width: u32, height: u32, out: &mut De
     out.data.clear();
     out.data.reserve(w * height as usize);
     for row in undistorted.chunks_exact(w.max(1)).take(height as usize) {
-        out.data.extend(row.iter().rev().map(|&mm| depth_mm_to_count(mm)));
+        out.data
+            .extend(row.iter().rev().map(|&mm| depth_mm_to_count(mm)));
     }
 }
 
@@ -78,14 +79,21 @@ pub fn pixel_rgb(pixel: u32, format: FrameFormat) -> [u8; 3] {
 /// Writes the unmirrored registered colour (row-major, `width * height`
 /// 4-byte pixels in `format`, mirrored) into `out`, resizing it. Pixels
 /// without colour (0) stay black.
-pub fn unmirror_color(registered: &[u32], format: FrameFormat, width: u32, height: u32, out: &mut ColorImage) {
+pub fn unmirror_color(
+    registered: &[u32],
+    format: FrameFormat,
+    width: u32,
+    height: u32,
+    out: &mut ColorImage,
+) {
     let w = width as usize;
     out.width = width;
     out.height = height;
     out.data.clear();
     out.data.reserve(w * height as usize);
     for row in registered.chunks_exact(w.max(1)).take(height as usize) {
-        out.data.extend(row.iter().rev().map(|&px| pixel_rgb(px, format)));
+        out.data
+            .extend(row.iter().rev().map(|&px| pixel_rgb(px, format)));
     }
 }
 

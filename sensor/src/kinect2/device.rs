@@ -292,7 +292,9 @@ type SharedContext = Arc<Mutex<ContextHandle>>;
 fn lock(context: &SharedContext) -> MutexGuard<'_, ContextHandle> {
     // A panic while holding the lock cannot leave the C++ object half
     // updated (the shim catches everything), so a poisoned lock is usable.
-    context.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+    context
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
 /// The libfreenect2 context: enumerates and opens devices.
@@ -307,7 +309,11 @@ impl Context {
         log::install();
         let mut raw = std::ptr::null_mut();
         // SAFETY: `raw` is a valid out-pointer.
-        check(unsafe { sys::f2s_context_new(&mut raw) }, "create the libfreenect2 context", None)?;
+        check(
+            unsafe { sys::f2s_context_new(&mut raw) },
+            "create the libfreenect2 context",
+            None,
+        )?;
         let handle = NonNull::new(raw).ok_or(Kinect2Error::Operation {
             action: "create the libfreenect2 context",
             serial: None,
@@ -529,10 +535,14 @@ impl Device {
 
     pub fn firmware_version(&mut self) -> Result<String, Kinect2Error> {
         let device = self.handle.as_ptr();
-        read_string("read the firmware version", Some(&self.serial), |buffer, capacity, length| {
-            // SAFETY: `device` is open; `buffer` holds `capacity` writable bytes.
-            unsafe { sys::f2s_device_firmware(device, buffer, capacity, length) }
-        })
+        read_string(
+            "read the firmware version",
+            Some(&self.serial),
+            |buffer, capacity, length| {
+                // SAFETY: `device` is open; `buffer` holds `capacity` writable bytes.
+                unsafe { sys::f2s_device_firmware(device, buffer, capacity, length) }
+            },
+        )
     }
 
     /// Applies a depth configuration; only before [`Device::start`] or after
@@ -564,7 +574,11 @@ impl Device {
         let mut raw = sys::f2s_color_params::default();
         // SAFETY: the device is open and `raw` is writable.
         let status = unsafe { sys::f2s_device_color_params(self.handle.as_ptr(), &mut raw) };
-        check(status, "read the colour camera parameters", Some(&self.serial))?;
+        check(
+            status,
+            "read the colour camera parameters",
+            Some(&self.serial),
+        )?;
         Ok(ColorParams(raw))
     }
 
@@ -578,8 +592,9 @@ impl Device {
             let listener = Listener::new(types, &self.serial)?;
             // SAFETY: the device is open and not streaming; the listener
             // lives until after the device is freed (see Drop).
-            let status =
-                unsafe { sys::f2s_device_set_listener(self.handle.as_ptr(), listener.handle.as_ptr()) };
+            let status = unsafe {
+                sys::f2s_device_set_listener(self.handle.as_ptr(), listener.handle.as_ptr())
+            };
             check(status, "attach the frame listener", Some(&self.serial))?;
             if let Some(old) = self.listener.replace(listener) {
                 self.retired_listeners.push(old);
@@ -588,7 +603,11 @@ impl Device {
         log::clear_last_problem();
         // SAFETY: the device is open with a listener attached.
         let status = unsafe {
-            sys::f2s_device_start(self.handle.as_ptr(), i32::from(streams.color), i32::from(streams.depth))
+            sys::f2s_device_start(
+                self.handle.as_ptr(),
+                i32::from(streams.color),
+                i32::from(streams.depth),
+            )
         };
         check(status, "start the streams", Some(&self.serial))?;
         self.streaming = true;
@@ -609,7 +628,10 @@ impl Device {
     }
 
     /// Waits up to `timeout` for a complete frame set; `Ok(None)` on timeout.
-    pub fn wait_for_frames(&mut self, timeout: Duration) -> Result<Option<FrameSet<'_>>, Kinect2Error> {
+    pub fn wait_for_frames(
+        &mut self,
+        timeout: Duration,
+    ) -> Result<Option<FrameSet<'_>>, Kinect2Error> {
         let Some(listener) = self.listener.as_mut() else {
             return Err(Kinect2Error::Operation {
                 action: "wait for frames before starting the streams",

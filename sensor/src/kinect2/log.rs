@@ -17,16 +17,24 @@ static LAST_PROBLEM: Mutex<Option<String>> = Mutex::new(None);
 pub fn install() {
     INSTALL.call_once(|| {
         let level = match tracing::level_filters::LevelFilter::current() {
-            f if f >= tracing::level_filters::LevelFilter::TRACE => sys::f2s_log_level::F2S_LOG_DEBUG,
-            f if f >= tracing::level_filters::LevelFilter::DEBUG => sys::f2s_log_level::F2S_LOG_INFO,
+            f if f >= tracing::level_filters::LevelFilter::TRACE => {
+                sys::f2s_log_level::F2S_LOG_DEBUG
+            }
+            f if f >= tracing::level_filters::LevelFilter::DEBUG => {
+                sys::f2s_log_level::F2S_LOG_INFO
+            }
             _ => sys::f2s_log_level::F2S_LOG_WARNING,
         };
         // SAFETY: `forward` is an `extern "C"` function that lives for the
         // whole process and never unwinds; `user` is unused (null). The Once
         // makes this the only call, before any context exists.
-        let status = unsafe { sys::f2s_set_log_callback(Some(forward), std::ptr::null_mut(), level) };
+        let status =
+            unsafe { sys::f2s_set_log_callback(Some(forward), std::ptr::null_mut(), level) };
         if status != sys::f2s_status::F2S_OK {
-            tracing::warn!(status = status.0, "could not route libfreenect2's log into tracing");
+            tracing::warn!(
+                status = status.0,
+                "could not route libfreenect2's log into tracing"
+            );
         }
     });
 }
@@ -44,7 +52,12 @@ pub fn take_last_problem() -> Option<String> {
     LAST_PROBLEM.lock().ok().and_then(|mut last| last.take())
 }
 
-extern "C" fn forward(level: i32, message: *const std::ffi::c_char, length: usize, _user: *mut c_void) {
+extern "C" fn forward(
+    level: i32,
+    message: *const std::ffi::c_char,
+    length: usize,
+    _user: *mut c_void,
+) {
     if message.is_null() {
         return;
     }
@@ -55,7 +68,9 @@ extern "C" fn forward(level: i32, message: *const std::ffi::c_char, length: usiz
     // Never unwind into C++: contain anything a subscriber might do.
     let _ = std::panic::catch_unwind(|| {
         let level = sys::f2s_log_level(level as u32);
-        if level == sys::f2s_log_level::F2S_LOG_ERROR || level == sys::f2s_log_level::F2S_LOG_WARNING {
+        if level == sys::f2s_log_level::F2S_LOG_ERROR
+            || level == sys::f2s_log_level::F2S_LOG_WARNING
+        {
             if let Ok(mut last) = LAST_PROBLEM.lock() {
                 *last = Some(text.to_string());
             }

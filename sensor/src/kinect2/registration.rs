@@ -3,7 +3,9 @@
 
 use std::ptr::NonNull;
 
-use super::device::{ColorParams, FrameView, IrParams, COLOR_HEIGHT, COLOR_WIDTH, DEPTH_HEIGHT, DEPTH_WIDTH};
+use super::device::{
+    ColorParams, FrameView, IrParams, COLOR_HEIGHT, COLOR_WIDTH, DEPTH_HEIGHT, DEPTH_WIDTH,
+};
 use super::error::{Kinect2Error, ShimStatus};
 use super::sys;
 
@@ -25,7 +27,9 @@ unsafe impl Sync for Registration {}
 
 impl std::fmt::Debug for Registration {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Registration").field("ir", &self.ir).finish_non_exhaustive()
+        f.debug_struct("Registration")
+            .field("ir", &self.ir)
+            .finish_non_exhaustive()
     }
 }
 
@@ -43,13 +47,23 @@ fn check(status: sys::f2s_status, action: &'static str) -> Result<(), Kinect2Err
     }
 }
 
-fn check_view(view: &FrameView<'_>, width: usize, height: usize, what: &str) -> Result<(), Kinect2Error> {
+fn check_view(
+    view: &FrameView<'_>,
+    width: usize,
+    height: usize,
+    what: &str,
+) -> Result<(), Kinect2Error> {
     if view.width() == width && view.height() == height && view.bytes_per_pixel() == 4 {
         Ok(())
     } else {
         Err(Kinect2Error::BadImageSize {
             expected: format!("a {width} x {height} x 4 {what} frame"),
-            got: format!("{} x {} x {}", view.width(), view.height(), view.bytes_per_pixel()),
+            got: format!(
+                "{} x {} x {}",
+                view.width(),
+                view.height(),
+                view.bytes_per_pixel()
+            ),
         })
     }
 }
@@ -59,7 +73,9 @@ fn check_len(len: usize, what: &str) -> Result<(), Kinect2Error> {
         Ok(())
     } else {
         Err(Kinect2Error::BadImageSize {
-            expected: format!("a {DEPTH_WIDTH} x {DEPTH_HEIGHT} {what} buffer ({DEPTH_PIXELS} pixels)"),
+            expected: format!(
+                "a {DEPTH_WIDTH} x {DEPTH_HEIGHT} {what} buffer ({DEPTH_PIXELS} pixels)"
+            ),
             got: format!("{len} pixels"),
         })
     }
@@ -91,7 +107,11 @@ impl Registration {
 
     /// Undistorts `depth` (512 x 424 float mm) into `undistorted` (0 where no
     /// distorted pixel maps).
-    pub fn undistort(&self, depth: &FrameView<'_>, undistorted: &mut [f32]) -> Result<(), Kinect2Error> {
+    pub fn undistort(
+        &self,
+        depth: &FrameView<'_>,
+        undistorted: &mut [f32],
+    ) -> Result<(), Kinect2Error> {
         check_view(depth, DEPTH_WIDTH, DEPTH_HEIGHT, "depth")?;
         check_len(undistorted.len(), "undistorted depth")?;
         let mut out = sys::f2s_image {
@@ -103,7 +123,8 @@ impl Registration {
         // SAFETY: the registration is alive; `depth` views 512*424*4 readable
         // bytes; `out` points to 512*424 writable f32 (checked above), which
         // the shim writes as 4-byte pixels and nothing else aliases.
-        let status = unsafe { sys::f2s_registration_undistort(self.handle.as_ptr(), depth.raw(), &mut out) };
+        let status =
+            unsafe { sys::f2s_registration_undistort(self.handle.as_ptr(), depth.raw(), &mut out) };
         check(status, "undistort the depth image")
     }
 

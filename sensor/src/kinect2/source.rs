@@ -86,6 +86,8 @@ pub struct CaptureStats {
 
 /// Slice of every blocking wait, so that a stop request is seen quickly.
 const WAIT_SLICE: Duration = Duration::from_millis(200);
+/// How often the counters are logged while streaming.
+const REPORT_EVERY: Duration = Duration::from_secs(60);
 
 /// A started device with what it needs to convert frames.
 struct Running {
@@ -107,6 +109,7 @@ pub struct Kinect2Source {
     stats: CaptureStats,
     next_index: u64,
     backoff: Duration,
+    last_report: Instant,
     undistorted: Vec<f32>,
     registered: Vec<u32>,
 }
@@ -181,6 +184,7 @@ impl Kinect2Source {
                 ..CaptureStats::default()
             },
             next_index: 0,
+            last_report: Instant::now(),
             undistorted: vec![0.0; DEPTH_PIXELS],
             registered: vec![0; DEPTH_PIXELS],
         }))
@@ -234,7 +238,11 @@ impl Kinect2Source {
                 self.running = Some(running);
                 self.stats.reconnects += 1;
                 self.backoff = self.options.min_backoff;
-                tracing::info!(serial = self.serial, reconnects = self.stats.reconnects, "Kinect v2 reconnected");
+                tracing::info!(
+                    serial = self.serial,
+                    reconnects = self.stats.reconnects,
+                    "Kinect v2 reconnected"
+                );
             }
             Err(err) => {
                 self.stats.failed_opens += 1;
@@ -260,19 +268,36 @@ impl Kinect2Source {
         self.next_index += 1;
         let Some(depth) = set.depth() else {
             self.stats.malformed += 1;
-            tracing::warn!(serial = self.serial, index, "frame set without depth; skipped");
+            tracing::warn!(
+                serial = self.serial,
+                index,
+                "frame set without depth; skipped"
+            );
             return Ok(Some(false));
         };
-        let color = if self.options.color { set.color() } else { None };
+        let color = if self.options.color {
+            set.color()
+        } else {
+            None
+        };
         if self.options.color && color.is_none() {
             self.stats.malformed += 1;
-            tracing::warn!(serial = self.serial, index, "frame set without colour; skipped");
+            tracing::warn!(
+                serial = self.serial,
+                index,
+                "frame set without colour; skipped"
+            );
             return Ok(Some(false));
         }
         let status = depth.status() | color.map_or(0, |c| c.status());
         if status != 0 {
             self.stats.bad_status += 1;
-            tracing::debug!(serial = self.serial, index, status, "frame with non-zero status; skipped");
+            tracing::debug!(
+                serial = self.serial,
+                index,
+                status,
+                "frame with non-zero status; skipped"
+            );
             return Ok(Some(false));
         }
         let registered = match color {
@@ -287,7 +312,9 @@ impl Kinect2Source {
                 Some(color.format())
             }
             None => {
-                running.registration.undistort(&depth, &mut self.undistorted)?;
+                running
+                    .registration
+                    .undistort(&depth, &mut self.undistorted)?;
                 None
             }
         };
@@ -333,7 +360,22 @@ impl FrameSource for Kinect2Source {
                 continue;
             }
             match self.convert(frame) {
-                Ok(Some(true)) => return Ok(true),
+                Ok(Some(true)) => {
+                    if self.last_report.elapsed() >= REPORT_EVERY {
+                        self.last_report = Instant::now();
+                        let stats = self.stats;
+                        tracing::info!(
+                            serial = self.serial,
+                            frames = stats.frames,
+                            bad_status = stats.bad_status,
+                            malformed = stats.malformed,
+                            lost = stats.lost,
+                            reconnects = stats.reconnects,
+                            "Kinect v2 counters"
+                        );
+                    }
+                    return Ok(true);
+                }
                 Ok(Some(false)) => continue,
                 Ok(None) => {
                     let silent = self

@@ -178,7 +178,10 @@ impl CaptureConfig {
 
 /// The device settings from the command line over the config file over
 /// libfreenect2's defaults.
-pub fn resolve_options(args: &CaptureArgs, config: &CaptureConfig) -> anyhow::Result<Kinect2Options> {
+pub fn resolve_options(
+    args: &CaptureArgs,
+    config: &CaptureConfig,
+) -> anyhow::Result<Kinect2Options> {
     let file = &config.kinect2;
     let device = match (&args.serial, args.device_index) {
         (Some(serial), _) => DeviceSelector::Serial(serial.clone()),
@@ -224,7 +227,9 @@ pub fn resolve_options(args: &CaptureArgs, config: &CaptureConfig) -> anyhow::Re
     }
     let frame_timeout_s = args.frame_timeout_s.or(file.frame_timeout_s).unwrap_or(3.0);
     if !(frame_timeout_s.is_finite() && frame_timeout_s > 0.0) {
-        anyhow::bail!("frame_timeout_s must be a positive number of seconds, not {frame_timeout_s}");
+        anyhow::bail!(
+            "frame_timeout_s must be a positive number of seconds, not {frame_timeout_s}"
+        );
     }
     let mount = Mount {
         height_m: args
@@ -297,8 +302,8 @@ pub fn run(args: &CaptureArgs, stop: &StopFlag) -> anyhow::Result<CaptureOutcome
         libfreenect2 = library_version(),
         "opening the Kinect v2"
     );
-    let Some(mut source) = Kinect2Source::open(options, stop.clone())
-        .context("cannot start the Kinect v2")?
+    let Some(mut source) =
+        Kinect2Source::open(options, stop.clone()).context("cannot start the Kinect v2")?
     else {
         tracing::info!("stopped before a Kinect v2 appeared");
         return Ok(CaptureOutcome {
@@ -324,7 +329,8 @@ pub fn run(args: &CaptureArgs, stop: &StopFlag) -> anyhow::Result<CaptureOutcome
     // Stop the streams (then free the listener) before reporting.
     source.close();
     let capture = source.stats();
-    let publish = result.with_context(|| format!("capture from Kinect v2 {} failed", source.serial()))?;
+    let publish =
+        result.with_context(|| format!("capture from Kinect v2 {} failed", source.serial()))?;
     tracing::info!(
         published = publish.published,
         bad_status = capture.bad_status,
@@ -361,7 +367,10 @@ mod tests {
         assert_eq!(from_file.device, DeviceSelector::Serial("111".into()));
         assert_eq!(from_file.pipeline, Pipeline::Cpu);
         assert_eq!(from_file.depth.max_depth_m, 6.0);
-        assert_eq!(from_file.depth.min_depth_m, DepthConfig::default().min_depth_m);
+        assert_eq!(
+            from_file.depth.min_depth_m,
+            DepthConfig::default().min_depth_m
+        );
         assert!(!from_file.color);
         assert_eq!(from_file.mount.height_m, 0.4);
         assert_eq!(from_file.mount.pitch_deg, -15.0);
@@ -395,6 +404,13 @@ mod tests {
         assert!(toml::from_str::<CaptureConfig>("[kinect2]\nserail = \"1\"\n").is_err());
         let empty_range = parse(&["--min-depth-m", "3", "--max-depth-m", "2"]);
         assert!(resolve_options(&empty_range, &CaptureConfig::default()).is_err());
-        assert!(CaptureArgs::try_parse_from(["slope-capture", "--serial", "1", "--device-index", "0"]).is_err());
+        assert!(CaptureArgs::try_parse_from([
+            "slope-capture",
+            "--serial",
+            "1",
+            "--device-index",
+            "0"
+        ])
+        .is_err());
     }
 }

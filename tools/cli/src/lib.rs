@@ -8,5 +8,7 @@ pub mod cli;
 pub mod demo;
 pub mod echo;
 pub mod estimator;
+pub mod eval;
 pub mod record;
+pub mod render;
 pub mod replay;

@@ -223,7 +223,9 @@ pub fn cloud_to_images(
     depth.width = header.width;
     depth.height = header.height;
     depth.data.clear();
-    depth.data.extend(points.iter().map(|p| depth_count(p, unit_m)));
+    depth
+        .data
+        .extend(points.iter().map(|p| depth_count(p, unit_m)));
     if header.has_color != 0 {
         let image = color.get_or_insert_with(ColorImage::default);
         image.width = header.width;
@@ -300,17 +302,28 @@ pub fn record_source(
         let timestamp_ns = timeline.stamp(frame.source_stamp_ns);
         writer
             .write_frame(timestamp_ns, &frame.depth, frame.color.as_ref(), None)
-            .with_context(|| format!("cannot write frame {} into {}", stats.written, writer.dir().display()))?;
+            .with_context(|| {
+                format!(
+                    "cannot write frame {} into {}",
+                    stats.written,
+                    writer.dir().display()
+                )
+            })?;
         stats.written += 1;
     }
     Ok(stats)
 }
 
 /// Records the cloud topic until a limit is reached or `stop` is set.
-pub fn record_topic(args: &RecordArgs, limits: &RecordLimits, stop: &StopFlag) -> anyhow::Result<RecordStats> {
+pub fn record_topic(
+    args: &RecordArgs,
+    limits: &RecordLimits,
+    stop: &StopFlag,
+) -> anyhow::Result<RecordStats> {
     let names = args.common.service_names();
     let node = create_node(&node_name("slope-record"))?;
-    let subscriber = CloudSubscriber::create(&node, &names).context("cannot subscribe to clouds")?;
+    let subscriber =
+        CloudSubscriber::create(&node, &names).context("cannot subscribe to clouds")?;
     tracing::info!(service = subscriber.service_name(), out = %args.out_dir.display(), "recording the cloud topic");
 
     let mut stats = RecordStats::default();
@@ -360,13 +373,20 @@ pub fn record_topic(args: &RecordArgs, limits: &RecordLimits, stop: &StopFlag) -
                 if header.frame_index > last + 1 {
                     let missed = header.frame_index - last - 1;
                     stats.missed += missed;
-                    tracing::warn!(missed, frame = header.frame_index, "clouds were missed (recorder too slow?)");
+                    tracing::warn!(
+                        missed,
+                        frame = header.frame_index,
+                        "clouds were missed (recorder too slow?)"
+                    );
                 }
             }
             last_index = Some(header.frame_index);
             if points.len() != header.point_count() {
                 stats.skipped += 1;
-                tracing::warn!(frame = header.frame_index, "cloud with a payload that does not match its header; skipped");
+                tracing::warn!(
+                    frame = header.frame_index,
+                    "cloud with a payload that does not match its header; skipped"
+                );
                 continue;
             }
             let (recording, first) = match &mut writer {
@@ -385,8 +405,11 @@ pub fn record_topic(args: &RecordArgs, limits: &RecordLimits, stop: &StopFlag) -
                         Some(CloudSource::Camera) => "kinect2",
                         _ => "replay",
                     };
-                    let mut recording = RecordingWriter::create(&args.out_dir, &meta_for(&info, sensor), false)
-                        .with_context(|| format!("cannot create the recording {}", args.out_dir.display()))?;
+                    let mut recording =
+                        RecordingWriter::create(&args.out_dir, &meta_for(&info, sensor), false)
+                            .with_context(|| {
+                                format!("cannot create the recording {}", args.out_dir.display())
+                            })?;
                     recording.set_compression(args.compression.into());
                     first_at = Some(Instant::now());
                     tracing::info!(
@@ -399,16 +422,28 @@ pub fn record_topic(args: &RecordArgs, limits: &RecordLimits, stop: &StopFlag) -
                     (recording, *first)
                 }
             };
-            if header.width != first.width || header.height != first.height || header.intrinsics != first.intrinsics {
+            if header.width != first.width
+                || header.height != first.height
+                || header.intrinsics != first.intrinsics
+            {
                 stats.skipped += 1;
-                tracing::warn!(frame = header.frame_index, "cloud with another size or intrinsics than the first; skipped");
+                tracing::warn!(
+                    frame = header.frame_index,
+                    "cloud with another size or intrinsics than the first; skipped"
+                );
                 continue;
             }
             cloud_to_images(&header, points, TOPIC_DEPTH_UNIT_M, &mut depth, &mut color);
             let timestamp_ns = timeline.stamp(header.source_stamp_ns);
             recording
                 .write_frame(timestamp_ns, &depth, color.as_ref(), None)
-                .with_context(|| format!("cannot write frame {} into {}", stats.written, args.out_dir.display()))?;
+                .with_context(|| {
+                    format!(
+                        "cannot write frame {} into {}",
+                        stats.written,
+                        args.out_dir.display()
+                    )
+                })?;
             stats.written += 1;
             if limits.max_frames.is_some_and(|max| stats.written >= max) {
                 break 'outer;
@@ -417,9 +452,9 @@ pub fn record_topic(args: &RecordArgs, limits: &RecordLimits, stop: &StopFlag) -
     }
     match writer {
         Some((recording, _)) => {
-            recording
-                .finish()
-                .with_context(|| format!("cannot finish the recording {}", args.out_dir.display()))?;
+            recording.finish().with_context(|| {
+                format!("cannot finish the recording {}", args.out_dir.display())
+            })?;
         }
         None => tracing::warn!("no cloud arrived; nothing was recorded"),
     }
@@ -427,7 +462,11 @@ pub fn record_topic(args: &RecordArgs, limits: &RecordLimits, stop: &StopFlag) -
 }
 
 #[cfg(feature = "kinect2")]
-fn record_kinect(args: &RecordArgs, limits: &RecordLimits, stop: &StopFlag) -> anyhow::Result<RecordStats> {
+fn record_kinect(
+    args: &RecordArgs,
+    limits: &RecordLimits,
+    stop: &StopFlag,
+) -> anyhow::Result<RecordStats> {
     use slope_sensor::kinect2::{DeviceSelector, Kinect2Options, Kinect2Source, Pipeline};
     let pipeline = match &args.pipeline {
         Some(name) => name.parse::<Pipeline>()?,
@@ -443,14 +482,17 @@ fn record_kinect(args: &RecordArgs, limits: &RecordLimits, stop: &StopFlag) -> a
         mount: override_mount(Mount::UNKNOWN, args),
         ..Kinect2Options::default()
     };
-    let Some(mut source) = Kinect2Source::open(options, stop.clone()).context("cannot start the Kinect v2")? else {
+    let Some(mut source) =
+        Kinect2Source::open(options, stop.clone()).context("cannot start the Kinect v2")?
+    else {
         return Ok(RecordStats {
             stopped: true,
             ..RecordStats::default()
         });
     };
-    let mut writer = RecordingWriter::create(&args.out_dir, &meta_for(source.info(), "kinect2"), false)
-        .with_context(|| format!("cannot create the recording {}", args.out_dir.display()))?;
+    let mut writer =
+        RecordingWriter::create(&args.out_dir, &meta_for(source.info(), "kinect2"), false)
+            .with_context(|| format!("cannot create the recording {}", args.out_dir.display()))?;
     writer.set_compression(args.compression.into());
     tracing::info!(serial = source.serial(), out = %args.out_dir.display(), "recording the Kinect v2");
     let stats = record_source(&mut source, &mut writer, limits, stop);
@@ -507,7 +549,13 @@ mod tests {
         let (width, height) = (64u32, 48u32);
         let projector = Projector::new(width, height, intrinsics, 0.001);
         let original: Vec<u16> = (0..width * height)
-            .map(|i| if i % 13 == 0 { 0 } else { 400 + ((i * 7919) % 11_000) as u16 })
+            .map(|i| {
+                if i.is_multiple_of(13) {
+                    0
+                } else {
+                    400 + ((i * 7919) % 11_000) as u16
+                }
+            })
             .collect();
         let points: Vec<CloudPoint> = original
             .iter()
@@ -546,10 +594,15 @@ mod tests {
         let mut source = RecordingSource::new(recording, false);
         let out = tempfile::tempdir().expect("tempdir");
         let dir = out.path().join("copy");
-        let mut writer =
-            RecordingWriter::create(&dir, &meta_for(source.info(), "kinect2"), false).expect("writer");
-        let stats = record_source(&mut source, &mut writer, &RecordLimits::default(), &StopFlag::new())
-            .expect("record");
+        let mut writer = RecordingWriter::create(&dir, &meta_for(source.info(), "kinect2"), false)
+            .expect("writer");
+        let stats = record_source(
+            &mut source,
+            &mut writer,
+            &RecordLimits::default(),
+            &StopFlag::new(),
+        )
+        .expect("record");
         writer.finish().expect("finish");
         assert_eq!(stats.written, 1);
         let copy = Recording::open(&dir).expect("copy");

@@ -29,7 +29,10 @@ fn help_names_the_program_and_shows_examples() {
         let (ok, stdout, _) = run(bin, &["--help"]);
         assert!(ok, "{name} --help failed");
         assert!(stdout.contains(name), "{name} --help does not name it");
-        assert!(stdout.contains("Examples:"), "{name} --help has no examples");
+        assert!(
+            stdout.contains("Examples:"),
+            "{name} --help has no examples"
+        );
         assert!(
             stdout.contains("--service-prefix"),
             "{name} --help lacks --service-prefix"

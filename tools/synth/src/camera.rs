@@ -90,7 +90,13 @@ mod tests {
 
     #[test]
     fn up_vector_matches_mount_convention() {
-        for (pitch, roll) in [(-20.0, 0.0), (-35.0, 5.0), (10.0, -12.0), (0.0, 0.0), (-76.0, 3.9)] {
+        for (pitch, roll) in [
+            (-20.0, 0.0),
+            (-35.0, 5.0),
+            (10.0, -12.0),
+            (0.0, 0.0),
+            (-76.0, 3.9),
+        ] {
             let pose = CameraPose::new(0.5, pitch, roll, 0.0, 0.0);
             let up = pose.up_in_camera();
             let expected = Mount {
@@ -101,7 +107,10 @@ mod tests {
             .up_vector()
             .expect("pitch known");
             for k in 0..3 {
-                assert!((up[k] - expected[k]).abs() < 1e-12, "{pitch} {roll}: {up:?} vs {expected:?}");
+                assert!(
+                    (up[k] - expected[k]).abs() < 1e-12,
+                    "{pitch} {roll}: {up:?} vs {expected:?}"
+                );
             }
             // Yaw about the vertical never changes the up vector.
             let yawed = CameraPose::new(0.5, pitch, roll, 17.0, 0.0).up_in_camera();

@@ -184,7 +184,10 @@ impl Args {
             || self.yaw.is_some()
             || self.descending;
         if self.slope == Some(0.0) {
-            anyhow::ensure!(!ramp_flags, "--slope 0 removes the ramp; drop the ramp flags");
+            anyhow::ensure!(
+                !ramp_flags,
+                "--slope 0 removes the ramp; drop the ramp flags"
+            );
             scene.ramp = None;
         } else if self.slope.is_some() || ramp_flags {
             let ramp = scene.ramp.get_or_insert_with(Ramp::default);
@@ -257,8 +260,18 @@ mod tests {
     #[test]
     fn flags_build_the_documented_scene() {
         let args = parse(&[
-            "--slope", "16", "--distance", "1.5", "--height", "0.5", "--pitch", "-20", "--frames",
-            "30", "--seed", "7",
+            "--slope",
+            "16",
+            "--distance",
+            "1.5",
+            "--height",
+            "0.5",
+            "--pitch",
+            "-20",
+            "--frames",
+            "30",
+            "--seed",
+            "7",
         ]);
         let (scene, model) = args.scene_and_model().expect("valid");
         assert_eq!(scene, Scene::default_ramp());
@@ -277,7 +290,9 @@ mod tests {
         assert!(model.is_clean());
         let (flat, _) = parse(&["--slope", "0"]).scene_and_model().expect("valid");
         assert!(flat.ramp.is_none());
-        assert!(parse(&["--slope", "0", "--distance", "2"]).scene_and_model().is_err());
+        assert!(parse(&["--slope", "0", "--distance", "2"])
+            .scene_and_model()
+            .is_err());
         assert!(parse(&["--slope", "120"]).scene_and_model().is_err());
     }
 }

@@ -47,7 +47,7 @@ pub use recording::{
 };
 pub use render::{quantise, render_depth, render_frame, DEPTH_UNIT_M};
 pub use scene::{
-    load_scene_file, parse_scene, CameraModel, GroundBox, MountPose, Motion, Ramp, Scene,
+    load_scene_file, parse_scene, CameraModel, GroundBox, Motion, MountPose, Ramp, Scene,
     SceneFile, SideWall, SlopeDirection,
 };
 pub use sensor_model::{axial_sigma_m, SensorModel};

@@ -109,7 +109,11 @@ mod tests {
         let mut checked = 0;
         for v in (0..m.height).step_by(7) {
             for u in (0..m.width).step_by(11) {
-                let d = Vec3::new((f64::from(u) - m.cx) / m.fx, (f64::from(v) - m.cy) / m.fy, 1.0);
+                let d = Vec3::new(
+                    (f64::from(u) - m.cx) / m.fx,
+                    (f64::from(v) - m.cy) / m.fy,
+                    1.0,
+                );
                 let down = -up.dot(&d);
                 match geometry.get(u, v) {
                     Some(hit) => {

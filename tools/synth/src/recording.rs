@@ -138,7 +138,15 @@ pub fn write_recording(
     seed: u64,
     out_dir: &Path,
 ) -> Result<RecordingSummary, WriteError> {
-    write_recording_with(scene, model, frames, seed, out_dir, WriteOptions::default(), |_| {})
+    write_recording_with(
+        scene,
+        model,
+        frames,
+        seed,
+        out_dir,
+        WriteOptions::default(),
+        |_| {},
+    )
 }
 
 /// [`write_recording`] with options, calling `on_frame(index)` after each
@@ -161,7 +169,13 @@ pub fn write_recording_with(
     for index in 0..frames {
         let nominal = Camera {
             model: scene.camera,
-            pose: CameraPose::new(scene.mount.height_m, 0.0, 0.0, 0.0, frame_forward_m(scene, index)),
+            pose: CameraPose::new(
+                scene.mount.height_m,
+                0.0,
+                0.0,
+                0.0,
+                frame_forward_m(scene, index),
+            ),
         };
         if world.contains(&nominal.pose.position) {
             return Err(WriteError::CameraInsideGeometry {

@@ -54,7 +54,7 @@ pub fn render_depth<R: Rng + ?Sized>(
     for v in 0..height {
         for u in 0..width {
             let i = v as usize * width as usize + u as usize;
-            let exact = geometry.pixels[i];
+            let exact = geometry.pixels.get(i).copied().flatten();
             let seen = if model.lateral_noise_px > 0.0 {
                 let du: f64 = rng.sample(StandardNormal);
                 let dv: f64 = rng.sample(StandardNormal);
@@ -71,7 +71,11 @@ pub fn render_depth<R: Rng + ?Sized>(
             let Some(hit) = seen else {
                 continue;
             };
-            let z = measure(&hit, i, &edges, world, model, camera, u, v, rng);
+            let partner = edges.get(i).copied().flatten();
+            // Length of the ray per metre of depth, to turn path-length
+            // errors into depth errors.
+            let ray_per_depth = camera.ray(f64::from(u), f64::from(v)).direction.norm();
+            let z = measure(&hit, partner, ray_per_depth, world, model, rng);
             depth.data[i] = match z {
                 Some(z) => quantise(z),
                 None => 0,
@@ -81,30 +85,25 @@ pub fn render_depth<R: Rng + ?Sized>(
     depth
 }
 
-/// The noisy depth of one reading, `None` when it is dropped.
-#[allow(clippy::too_many_arguments)]
+/// The noisy depth of one reading, `None` when it is dropped. `partner` is
+/// the depth across a discontinuity next to the pixel, if any.
 fn measure<R: Rng + ?Sized>(
     hit: &PixelHit,
-    index: usize,
-    edges: &[Option<f64>],
+    partner: Option<f64>,
+    ray_per_depth: f64,
     world: &World,
     model: &SensorModel,
-    camera: &Camera,
-    u: u32,
-    v: u32,
     rng: &mut R,
 ) -> Option<f64> {
     let mut z = hit.z_m;
-    if let Some(Some(other_z)) = edges.get(index) {
+    if let Some(other_z) = partner {
         if rng.random::<f64>() < model.flying_pixel_probability {
             let w: f64 = rng.random();
             z += w * (other_z - z);
         }
     }
     if model.multipath_bias_m > 0.0 {
-        // The bias lengthens the light path along the ray; in depth that
-        // is the path length over the ray's length per unit depth.
-        let ray_per_depth = camera.ray(f64::from(u), f64::from(v)).direction.norm();
+        // The bias lengthens the light path along the ray.
         z += world.multipath_bias_m(model, &hit.point, hit.surface) / ray_per_depth;
     }
     let theta = hit.incidence_rad();
@@ -115,7 +114,8 @@ fn measure<R: Rng + ?Sized>(
     if model.grazing_dropout && rng.random::<f64>() < model.grazing_dropout_probability(theta) {
         return None;
     }
-    if model.random_dropout_probability > 0.0 && rng.random::<f64>() < model.random_dropout_probability
+    if model.random_dropout_probability > 0.0
+        && rng.random::<f64>() < model.random_dropout_probability
     {
         return None;
     }
@@ -233,6 +233,9 @@ mod tests {
             kept += usize::from(inside);
         }
         assert!(kept > 10_000);
-        assert!(depth.data.iter().all(|&d| d == 0 || (500..=4500).contains(&d)));
+        assert!(depth
+            .data
+            .iter()
+            .all(|&d| d == 0 || (500..=4500).contains(&d)));
     }
 }

@@ -223,8 +223,16 @@ impl Scene {
     /// Checks every value; the error names the key.
     pub fn validate(&self) -> Result<(), SceneError> {
         let c = &self.camera;
-        check(c.width > 0 && c.height > 0, "camera.width", "image size must be > 0")?;
-        check(c.width <= 4096 && c.height <= 4096, "camera.width", "image size must be <= 4096")?;
+        check(
+            c.width > 0 && c.height > 0,
+            "camera.width",
+            "image size must be > 0",
+        )?;
+        check(
+            c.width <= 4096 && c.height <= 4096,
+            "camera.width",
+            "image size must be <= 4096",
+        )?;
         for (key, v) in [("camera.fx", c.fx), ("camera.fy", c.fy)] {
             check(v.is_finite() && v > 0.0, key, "must be a positive number")?;
         }
@@ -232,7 +240,11 @@ impl Scene {
             check(v.is_finite(), key, "must be a finite number")?;
         }
         let m = &self.mount;
-        check(m.height_m.is_finite() && m.height_m > 0.0, "mount.height_m", "must be > 0")?;
+        check(
+            m.height_m.is_finite() && m.height_m > 0.0,
+            "mount.height_m",
+            "must be > 0",
+        )?;
         check(
             m.pitch_deg.is_finite() && m.pitch_deg.abs() < 90.0,
             "mount.pitch_deg",
@@ -264,22 +276,54 @@ impl Scene {
                 "ramp.distance_m",
                 "must be > 0 (the foot line lies ahead of the camera)",
             )?;
-            check(!r.width_m.is_nan() && r.width_m > 0.0, "ramp.width_m", "must be > 0 or inf")?;
-            check(!r.length_m.is_nan() && r.length_m > 0.0, "ramp.length_m", "must be > 0 or inf")?;
+            check(
+                !r.width_m.is_nan() && r.width_m > 0.0,
+                "ramp.width_m",
+                "must be > 0 or inf",
+            )?;
+            check(
+                !r.length_m.is_nan() && r.length_m > 0.0,
+                "ramp.length_m",
+                "must be > 0 or inf",
+            )?;
             check(
                 r.landing_m.is_finite() && r.landing_m >= 0.0,
                 "ramp.landing_m",
                 "must be >= 0",
             )?;
-            check(r.yaw_deg.is_finite() && r.yaw_deg.abs() < 90.0, "ramp.yaw_deg", "must lie in (-90, 90)")?;
-            check(r.offset_m.is_finite(), "ramp.offset_m", "must be a finite number")?;
+            check(
+                r.yaw_deg.is_finite() && r.yaw_deg.abs() < 90.0,
+                "ramp.yaw_deg",
+                "must lie in (-90, 90)",
+            )?;
+            check(
+                r.offset_m.is_finite(),
+                "ramp.offset_m",
+                "must be a finite number",
+            )?;
         }
         for (i, w) in self.walls.iter().enumerate() {
             let key = |k: &str| format!("walls[{i}].{k}");
-            check(w.x_m.is_finite() && w.x_m != 0.0, &key("x_m"), "must be finite and non-zero")?;
-            check(w.from_m.is_finite() && w.to_m.is_finite(), &key("from_m"), "must be finite")?;
-            check(w.to_m > w.from_m, &key("to_m"), "must be greater than from_m")?;
-            check(w.height_m.is_finite() && w.height_m > 0.0, &key("height_m"), "must be > 0")?;
+            check(
+                w.x_m.is_finite() && w.x_m != 0.0,
+                &key("x_m"),
+                "must be finite and non-zero",
+            )?;
+            check(
+                w.from_m.is_finite() && w.to_m.is_finite(),
+                &key("from_m"),
+                "must be finite",
+            )?;
+            check(
+                w.to_m > w.from_m,
+                &key("to_m"),
+                "must be greater than from_m",
+            )?;
+            check(
+                w.height_m.is_finite() && w.height_m > 0.0,
+                &key("height_m"),
+                "must be > 0",
+            )?;
             check(
                 w.thickness_m.is_finite() && w.thickness_m > 0.0,
                 &key("thickness_m"),
@@ -288,7 +332,11 @@ impl Scene {
         }
         for (i, b) in self.boxes.iter().enumerate() {
             let key = |k: &str| format!("boxes[{i}].{k}");
-            check(b.x_m.is_finite() && b.y_m.is_finite(), &key("x_m"), "must be finite")?;
+            check(
+                b.x_m.is_finite() && b.y_m.is_finite(),
+                &key("x_m"),
+                "must be finite",
+            )?;
             check(
                 b.size_m.iter().all(|s| s.is_finite() && *s > 0.0),
                 &key("size_m"),
@@ -296,7 +344,11 @@ impl Scene {
             )?;
             check(b.yaw_deg.is_finite(), &key("yaw_deg"), "must be finite")?;
         }
-        check(self.walls.len() + self.boxes.len() < usize::from(u16::MAX), "boxes", "too many objects")?;
+        check(
+            self.walls.len() + self.boxes.len() < usize::from(u16::MAX),
+            "boxes",
+            "too many objects",
+        )?;
         Ok(())
     }
 }
@@ -329,10 +381,11 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<SceneFile, SceneError> {
             })
         })
         .transpose()?;
-    let scene = Scene::deserialize(toml::Value::Table(table)).map_err(|source| SceneError::Toml {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let scene =
+        Scene::deserialize(toml::Value::Table(table)).map_err(|source| SceneError::Toml {
+            path: path.to_path_buf(),
+            source,
+        })?;
     scene.validate().map_err(|e| e.in_file(path))?;
     if let Some(model) = &sensor {
         model.validate().map_err(|e| e.in_file(path))?;
@@ -392,7 +445,10 @@ mod tests {
         assert_eq!(s.boxes[0].size_m, [0.2, 0.3, 0.4]);
         let sensor = file.sensor.expect("has a sensor table");
         assert!(!sensor.axial_noise);
-        assert_eq!(sensor.lateral_noise_px, SensorModel::default().lateral_noise_px);
+        assert_eq!(
+            sensor.lateral_noise_px,
+            SensorModel::default().lateral_noise_px
+        );
     }
 
     #[test]
@@ -405,10 +461,13 @@ mod tests {
 
     #[test]
     fn typo_is_an_error_naming_the_key() {
-        let err = parse_scene("[ramp]\nslope_dg = 3.0\n", Path::new("s.toml"))
-            .expect_err("unknown key");
+        let err =
+            parse_scene("[ramp]\nslope_dg = 3.0\n", Path::new("s.toml")).expect_err("unknown key");
         let text = err.to_string();
-        assert!(text.contains("slope_dg") && text.contains("s.toml"), "{text}");
+        assert!(
+            text.contains("slope_dg") && text.contains("s.toml"),
+            "{text}"
+        );
     }
 
     #[test]
@@ -416,12 +475,18 @@ mod tests {
         let err = parse_scene("[ramp]\nslope_deg = 95.0\n", Path::new("x.toml"))
             .expect_err("out of range");
         let text = err.to_string();
-        assert!(text.contains("ramp.slope_deg") && text.contains("x.toml"), "{text}");
+        assert!(
+            text.contains("ramp.slope_deg") && text.contains("x.toml"),
+            "{text}"
+        );
         let err = parse_scene("[[walls]]\nfrom_m = 3.0\nto_m = 1.0\n", Path::new("x.toml"))
             .expect_err("empty wall");
         assert!(err.to_string().contains("walls[0].to_m"), "{err}");
-        let err = parse_scene("[ramp]\ndirection = \"descending\"\nslope_deg = 90.0\n", Path::new("x.toml"))
-            .expect_err("descending wall");
+        let err = parse_scene(
+            "[ramp]\ndirection = \"descending\"\nslope_deg = 90.0\n",
+            Path::new("x.toml"),
+        )
+        .expect_err("descending wall");
         assert!(err.to_string().contains("ramp.slope_deg"), "{err}");
     }
 

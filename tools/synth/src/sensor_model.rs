@@ -147,8 +147,14 @@ impl SensorModel {
             }
         }
         for (key, p) in [
-            ("sensor.flying_pixel_probability", self.flying_pixel_probability),
-            ("sensor.random_dropout_probability", self.random_dropout_probability),
+            (
+                "sensor.flying_pixel_probability",
+                self.flying_pixel_probability,
+            ),
+            (
+                "sensor.random_dropout_probability",
+                self.random_dropout_probability,
+            ),
         ] {
             if !(0.0..=1.0).contains(&p) {
                 return Err(invalid(key, "must lie in [0, 1]"));
@@ -158,10 +164,17 @@ impl SensorModel {
             return Err(invalid("sensor.multipath_decay_m", "must be > 0"));
         }
         if !(self.max_range_m.is_finite() && self.max_range_m > self.min_range_m) {
-            return Err(invalid("sensor.max_range_m", "must be greater than min_range_m"));
+            return Err(invalid(
+                "sensor.max_range_m",
+                "must be greater than min_range_m",
+            ));
         }
-        let (start, full) = (self.grazing_dropout_start_deg, self.grazing_dropout_full_deg);
-        if !(start.is_finite() && full.is_finite() && 0.0 <= start && start < full && full <= 90.0) {
+        let (start, full) = (
+            self.grazing_dropout_start_deg,
+            self.grazing_dropout_full_deg,
+        );
+        if !(start.is_finite() && full.is_finite() && 0.0 <= start && start < full && full <= 90.0)
+        {
             return Err(invalid(
                 "sensor.grazing_dropout_full_deg",
                 "need 0 <= grazing_dropout_start_deg < grazing_dropout_full_deg <= 90",

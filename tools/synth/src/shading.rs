@@ -41,6 +41,7 @@ fn shade_pixel(hit: &PixelHit) -> [u8; 3] {
             light *= 0.9;
         }
     }
+    // Clamped to [0, 255] first, so the cast cannot truncate.
     base.map(|c| (f64::from(c) * light).round().clamp(0.0, 255.0) as u8)
 }
 

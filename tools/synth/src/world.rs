@@ -97,8 +97,12 @@ impl World {
         let (sa, ca) = ramp.slope_deg.to_radians().sin_cos();
         let half_width = ramp.width_m / 2.0;
         let mut solid = ConvexSolid::default();
-        solid.faces.push(frame.face([0.0, 0.0, 0.0], [0.0, 0.0, -1.0], RAMP_UNDERSIDE));
-        solid.faces.push(frame.face([0.0, 0.0, 0.0], [0.0, -sa, ca], RAMP));
+        solid
+            .faces
+            .push(frame.face([0.0, 0.0, 0.0], [0.0, 0.0, -1.0], RAMP_UNDERSIDE));
+        solid
+            .faces
+            .push(frame.face([0.0, 0.0, 0.0], [0.0, -sa, ca], RAMP));
         let mut back_y = f64::INFINITY;
         if rise.is_finite() {
             back_y = if ramp.slope_deg >= 90.0 && ramp.landing_m == 0.0 {
@@ -106,12 +110,20 @@ impl World {
             } else {
                 run + ramp.landing_m
             };
-            solid.faces.push(frame.face([0.0, 0.0, rise], [0.0, 0.0, 1.0], LANDING));
-            solid.faces.push(frame.face([0.0, back_y, 0.0], [0.0, 1.0, 0.0], RAMP_BACK));
+            solid
+                .faces
+                .push(frame.face([0.0, 0.0, rise], [0.0, 0.0, 1.0], LANDING));
+            solid
+                .faces
+                .push(frame.face([0.0, back_y, 0.0], [0.0, 1.0, 0.0], RAMP_BACK));
         }
         if half_width.is_finite() {
-            solid.faces.push(frame.face([-half_width, 0.0, 0.0], [-1.0, 0.0, 0.0], RAMP_LEFT));
-            solid.faces.push(frame.face([half_width, 0.0, 0.0], [1.0, 0.0, 0.0], RAMP_RIGHT));
+            solid
+                .faces
+                .push(frame.face([-half_width, 0.0, 0.0], [-1.0, 0.0, 0.0], RAMP_LEFT));
+            solid
+                .faces
+                .push(frame.face([half_width, 0.0, 0.0], [1.0, 0.0, 0.0], RAMP_RIGHT));
         }
         self.solids.push(solid);
 
@@ -140,12 +152,20 @@ impl World {
         let half_width = ramp.width_m / 2.0;
 
         let mut wedge = ConvexSolid::default();
-        wedge.faces.push(frame.face([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], GROUND));
-        wedge.faces.push(frame.face([0.0, 0.0, 0.0], [0.0, sa, ca], RAMP));
+        wedge
+            .faces
+            .push(frame.face([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], GROUND));
+        wedge
+            .faces
+            .push(frame.face([0.0, 0.0, 0.0], [0.0, sa, ca], RAMP));
         if drop.is_finite() {
-            wedge.faces.push(frame.face([0.0, 0.0, -drop], [0.0, 0.0, -1.0], LANDING));
+            wedge
+                .faces
+                .push(frame.face([0.0, 0.0, -drop], [0.0, 0.0, -1.0], LANDING));
             let mut lower = ConvexSolid::default();
-            lower.faces.push(frame.face([0.0, 0.0, -drop], [0.0, 0.0, 1.0], LANDING));
+            lower
+                .faces
+                .push(frame.face([0.0, 0.0, -drop], [0.0, 0.0, 1.0], LANDING));
             self.solids.push(lower);
             let edge = half_width.min(UNBOUNDED_EDGE_M);
             self.junctions.push(ConcaveJunction {
@@ -159,10 +179,14 @@ impl World {
             // inner faces are the visible sides of the trench.
             for (side, surface) in [(-1.0, RAMP_LEFT), (1.0, RAMP_RIGHT)] {
                 let x = side * half_width;
-                wedge.faces.push(frame.face([x, 0.0, 0.0], [side, 0.0, 0.0], surface));
+                wedge
+                    .faces
+                    .push(frame.face([x, 0.0, 0.0], [side, 0.0, 0.0], surface));
                 let mut bank = ConvexSolid::default();
-                bank.faces.push(frame.face([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], GROUND));
-                bank.faces.push(frame.face([x, 0.0, 0.0], [-side, 0.0, 0.0], surface));
+                bank.faces
+                    .push(frame.face([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], GROUND));
+                bank.faces
+                    .push(frame.face([x, 0.0, 0.0], [-side, 0.0, 0.0], surface));
                 self.solids.push(bank);
             }
         }
@@ -179,11 +203,27 @@ impl World {
                 Vec3::new(-side, 0.0, 0.0),
                 face(BoxFace::Inner),
             ),
-            HalfSpace::through(&Pos3::new(outer, 0.0, 0.0), Vec3::new(side, 0.0, 0.0), face(BoxFace::Outer)),
-            HalfSpace::through(&Pos3::new(0.0, wall.from_m, 0.0), -Vec3::y(), face(BoxFace::Near)),
-            HalfSpace::through(&Pos3::new(0.0, wall.to_m, 0.0), Vec3::y(), face(BoxFace::Far)),
+            HalfSpace::through(
+                &Pos3::new(outer, 0.0, 0.0),
+                Vec3::new(side, 0.0, 0.0),
+                face(BoxFace::Outer),
+            ),
+            HalfSpace::through(
+                &Pos3::new(0.0, wall.from_m, 0.0),
+                -Vec3::y(),
+                face(BoxFace::Near),
+            ),
+            HalfSpace::through(
+                &Pos3::new(0.0, wall.to_m, 0.0),
+                Vec3::y(),
+                face(BoxFace::Far),
+            ),
             HalfSpace::through(&Pos3::origin(), -Vec3::z(), face(BoxFace::Bottom)),
-            HalfSpace::through(&Pos3::new(0.0, 0.0, wall.height_m), Vec3::z(), face(BoxFace::Top)),
+            HalfSpace::through(
+                &Pos3::new(0.0, 0.0, wall.height_m),
+                Vec3::z(),
+                face(BoxFace::Top),
+            ),
         ];
         self.solids.push(ConvexSolid { faces });
         let near_inner = Pos3::new(wall.x_m, wall.from_m, 0.0);
@@ -215,10 +255,22 @@ impl World {
         ];
         let mut faces = Vec::with_capacity(6);
         for (normal, half, f) in sides {
-            faces.push(HalfSpace::through(&(centre + normal * half), normal, face(f)));
+            faces.push(HalfSpace::through(
+                &(centre + normal * half),
+                normal,
+                face(f),
+            ));
         }
-        faces.push(HalfSpace::through(&centre, -Vec3::z(), face(BoxFace::Bottom)));
-        faces.push(HalfSpace::through(&(centre + Vec3::z() * sz), Vec3::z(), face(BoxFace::Top)));
+        faces.push(HalfSpace::through(
+            &centre,
+            -Vec3::z(),
+            face(BoxFace::Bottom),
+        ));
+        faces.push(HalfSpace::through(
+            &(centre + Vec3::z() * sz),
+            Vec3::z(),
+            face(BoxFace::Top),
+        ));
         self.solids.push(ConvexSolid { faces });
         // Each side meets the ground along its bottom edge.
         for (normal, half, f) in sides {
@@ -312,7 +364,9 @@ mod tests {
 
     /// Height of the terrain under (x, y), by casting a vertical ray.
     fn terrain(world: &World, x: f64, y: f64) -> Option<(f64, SurfaceKind)> {
-        world.cast(&down_ray(y, x)).map(|h| (10.0 - h.t, h.surface.kind))
+        world
+            .cast(&down_ray(y, x))
+            .map(|h| (10.0 - h.t, h.surface.kind))
     }
 
     #[test]
@@ -345,7 +399,10 @@ mod tests {
             assert_eq!(kind, expected.1, "y = {y}");
         }
         // Beyond the landing, and beside the ramp: ground.
-        assert_eq!(terrain(&world, 0.0, 2.0 + run + 0.6), Some((0.0, SurfaceKind::Ground)));
+        assert_eq!(
+            terrain(&world, 0.0, 2.0 + run + 0.6),
+            Some((0.0, SurfaceKind::Ground))
+        );
         assert_eq!(terrain(&world, 1.2, 2.5), Some((0.0, SurfaceKind::Ground)));
     }
 
@@ -451,6 +508,9 @@ mod tests {
         assert!((at(0.2) - expected).abs() < 1e-15);
         // A surface that is not part of any junction gets no bias.
         let ramp = Surface::single(SurfaceKind::Ramp);
-        assert_eq!(world.multipath_bias_m(&model, &Pos3::new(-1.0, 3.0, 0.0), ramp), 0.0);
+        assert_eq!(
+            world.multipath_bias_m(&model, &Pos3::new(-1.0, 3.0, 0.0), ramp),
+            0.0
+        );
     }
 }

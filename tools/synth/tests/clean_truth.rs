@@ -11,7 +11,8 @@ use std::collections::BTreeMap;
 use common::{angle_deg, back_project, fit_plane, frame, write_and_open, Plane};
 use nalgebra::Vector3;
 use slope_synth::{
-    quantise, BoxFace, GroundBox, MountPose, Ramp, Scene, SensorModel, SideWall, SlopeDirection, Surface, SurfaceKind,
+    quantise, BoxFace, GroundBox, MountPose, Ramp, Scene, SensorModel, SideWall, SlopeDirection,
+    Surface, SurfaceKind,
 };
 
 const TOLERANCE_DEG: f64 = 0.01;
@@ -49,7 +50,10 @@ fn clean_planes(scene: &Scene, frames: u64, check_frames: &[u64]) -> BTreeMap<Su
                     continue;
                 }
                 let z = f64::from(raw) * rec.meta().depth.unit_m;
-                assert!((z - hit.z_m).abs() <= 0.0005 + 1e-12, "quantisation at ({u}, {v})");
+                assert!(
+                    (z - hit.z_m).abs() <= 0.0005 + 1e-12,
+                    "quantisation at ({u}, {v})"
+                );
                 points
                     .entry(hit.surface)
                     .or_default()
@@ -66,7 +70,10 @@ fn clean_planes(scene: &Scene, frames: u64, check_frames: &[u64]) -> BTreeMap<Su
             .expect("the ground is in view");
         // The ground is the plane `up . p = -height`.
         let tilt = angle_deg(&ground.normal, &up);
-        assert!(tilt < TOLERANCE_DEG, "frame {index}: ground vs [mount] up: {tilt}°");
+        assert!(
+            tilt < TOLERANCE_DEG,
+            "frame {index}: ground vs [mount] up: {tilt}°"
+        );
         let height = ground.offset.abs();
         assert!(
             (height - scene.mount.height_m).abs() < 1e-3,
@@ -152,8 +159,12 @@ fn descending_slope_and_lower_landing() {
     assert_angle(angle_to_ground(&planes, RAMP), 12.0, "descending ramp");
     assert_angle(angle_to_ground(&planes, LANDING), 0.0, "lower landing");
     // The lower landing lies `length * sin(slope)` below the ground.
-    let drop = planes[&LANDING].offset.abs() - planes[&Surface::single(SurfaceKind::Ground)].offset.abs();
-    assert!((drop - 12f64.to_radians().sin()).abs() < 1e-3, "drop {drop}");
+    let drop =
+        planes[&LANDING].offset.abs() - planes[&Surface::single(SurfaceKind::Ground)].offset.abs();
+    assert!(
+        (drop - 12f64.to_radians().sin()).abs() < 1e-3,
+        "drop {drop}"
+    );
 }
 
 #[test]

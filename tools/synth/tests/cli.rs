@@ -14,7 +14,16 @@ fn writes_the_documented_default_scene() {
     let dir = tempfile::tempdir().expect("temp dir");
     let out = dir.path().join("ramp");
     let status = synth()
-        .args(["--slope", "16", "--distance", "1.5", "--height", "0.5", "--pitch", "-20"])
+        .args([
+            "--slope",
+            "16",
+            "--distance",
+            "1.5",
+            "--height",
+            "0.5",
+            "--pitch",
+            "-20",
+        ])
         .args(["--frames", "2", "--seed", "7", "-o"])
         .arg(&out)
         .env("RUST_LOG", "warn")
@@ -27,7 +36,10 @@ fn writes_the_documented_default_scene() {
     assert_eq!(rec.meta().sensor, "synthetic");
     assert_eq!(rec.frames()[1].timestamp_ns, 33_333_333);
     let mount = rec.mount();
-    assert_eq!((mount.height_m, mount.pitch_deg, mount.roll_deg), (0.5, -20.0, 0.0));
+    assert_eq!(
+        (mount.height_m, mount.pitch_deg, mount.roll_deg),
+        (0.5, -20.0, 0.0)
+    );
     let color = rec.read_color(&rec.frames()[0]).expect("readable");
     assert!(color.is_some());
 }
@@ -37,7 +49,13 @@ fn help_teaches_with_examples() {
     let out = synth().arg("--help").output().expect("runs");
     assert!(out.status.success());
     let text = String::from_utf8_lossy(&out.stdout);
-    for needle in ["Examples:", "--descending", "--clean", "--scene", "slope-synth --slope 16"] {
+    for needle in [
+        "Examples:",
+        "--descending",
+        "--clean",
+        "--scene",
+        "slope-synth --slope 16",
+    ] {
         assert!(text.contains(needle), "--help lacks {needle}");
     }
 }
@@ -66,5 +84,8 @@ fn failures_exit_non_zero_and_say_why() {
         .expect("runs");
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("ramp.slope_deg") && err.contains("bad.toml"), "{err}");
+    assert!(
+        err.contains("ramp.slope_deg") && err.contains("bad.toml"),
+        "{err}"
+    );
 }

@@ -16,7 +16,11 @@ fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
             if path.is_dir() {
                 stack.push(path);
             } else {
-                let rel = path.strip_prefix(dir).expect("inside").display().to_string();
+                let rel = path
+                    .strip_prefix(dir)
+                    .expect("inside")
+                    .display()
+                    .to_string();
                 out.push((rel, fs::read(&path).expect("readable file")));
             }
         }
@@ -47,10 +51,17 @@ fn same_seed_same_bytes_other_seed_other_noise() {
         .zip(&other)
         .filter(|(a, b)| a.0.starts_with("depth") && a.1 != b.1)
         .count();
-    assert_eq!(depth_differs, 3, "another seed must change every depth image");
+    assert_eq!(
+        depth_differs, 3,
+        "another seed must change every depth image"
+    );
     // The metadata and the frame table do not depend on the seed.
     let text = |files: &[(String, Vec<u8>)], name: &str| {
-        files.iter().find(|f| f.0 == name).map(|f| f.1.clone()).expect("present")
+        files
+            .iter()
+            .find(|f| f.0 == name)
+            .map(|f| f.1.clone())
+            .expect("present")
     };
     for name in ["recording.toml", "frames.csv"] {
         assert_eq!(text(&first, name), text(&other, name), "{name}");

@@ -62,7 +62,10 @@ fn patch_noise(scene: &Scene, seed: u64) -> (f64, f64, f64) {
             }
         }
     }
-    assert!(n > 0.99 * (FRAMES as f64) * 10_000.0, "too many dropouts: {n}");
+    assert!(
+        n > 0.99 * (FRAMES as f64) * 10_000.0,
+        "too many dropouts: {n}"
+    );
     let mean = sum / n;
     let measured = (sum_sq / n - mean * mean).sqrt();
     (measured, (predicted_var / n).sqrt(), mean)
@@ -176,7 +179,9 @@ fn large_errors_only_near_depth_edges() {
                     }
                     let other = f.geometry.get(nu, nv);
                     let edge = match (me, other) {
-                        (Some(a), Some(b)) => a.surface != b.surface && (a.z_m - b.z_m).abs() > 0.02,
+                        (Some(a), Some(b)) => {
+                            a.surface != b.surface && (a.z_m - b.z_m).abs() > 0.02
+                        }
                         (None, None) => false,
                         _ => true,
                     };
@@ -185,7 +190,9 @@ fn large_errors_only_near_depth_edges() {
                         edges[(nv * w + nu) as usize] = true;
                     }
                     if let (Some(a), Some(b)) = (me, other) {
-                        if a.surface != b.surface && (a.z_m - b.z_m).abs() > model.flying_pixel_jump_m {
+                        if a.surface != b.surface
+                            && (a.z_m - b.z_m).abs() > model.flying_pixel_jump_m
+                        {
                             partner[(v * w + u) as usize] = Some((b.z_m, b.surface));
                             partner[(nv * w + nu) as usize] = Some((a.z_m, a.surface));
                         }

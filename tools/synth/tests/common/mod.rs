@@ -100,5 +100,8 @@ pub fn fit_plane(points: &[Vector3<f64>]) -> Plane {
 
 /// Angle between two planes' normals (unsigned), degrees.
 pub fn angle_deg(a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
-    (a.dot(b).abs() / (a.norm() * b.norm())).min(1.0).acos().to_degrees()
+    (a.dot(b).abs() / (a.norm() * b.norm()))
+        .min(1.0)
+        .acos()
+        .to_degrees()
 }

@@ -1,0 +1,139 @@
+//! Prints what every stage did on one frame of a recording: planes, the
+//! chosen pair, the pass-through range, normal and cluster statistics.
+//!
+//! `cargo run -p slope-pipeline --example debug_frame -- DIR [FRAME]`
+
+#[path = "../tests/common/mod.rs"]
+mod common;
+
+use nalgebra::Vector3;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use slope_pipeline::cloud::angle_between_deg;
+use slope_pipeline::cosine_kmeans::CosineKmeans;
+use slope_pipeline::normals::NormalEstimator;
+use slope_pipeline::pass_through::PassThrough;
+use slope_pipeline::plane_selection::{select_planes, GroundSource, PlaneSummary};
+use slope_pipeline::ransac_planes::PlaneSegmenter;
+use slope_pipeline::statistical_outlier::StatisticalOutlierFilter;
+use slope_pipeline::EstimatorConfig;
+
+fn main() {
+    let mut args = std::env::args().skip(1);
+    let dir = args.next().expect("recording directory");
+    let k: usize = args.next().and_then(|a| a.parse().ok()).unwrap_or(0);
+    let rec = common::Recording::open(std::path::Path::new(&dir)).expect("recording");
+    let frame = rec.frame(k).expect("frame");
+    let view = frame.view();
+    let config = EstimatorConfig::default();
+    let mut keep = Vec::new();
+    let stats = StatisticalOutlierFilter::new().filter(&view, &config.outlier, &mut keep);
+    println!("outlier: {stats:?}");
+    let mut seg = PlaneSegmenter::new();
+    let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
+    let planes = seg.segment(&view, &keep, &config.ransac, &mut rng).to_vec();
+    let up = view.mount.up_vector().map(Vector3::from);
+    let w = view.width;
+    let summaries: Vec<PlaneSummary> = planes
+        .iter()
+        .map(|p| PlaneSummary {
+            plane: p.plane,
+            inliers: p.inliers.len(),
+            bottom_inliers: p
+                .inliers
+                .iter()
+                .filter(|&&i| i as usize / w >= view.height - view.height / 3)
+                .count(),
+            centroid: p.centroid,
+        })
+        .collect();
+    for (i, s) in summaries.iter().enumerate() {
+        let (u0, v0, u1, v1) =
+            planes[i]
+                .inliers
+                .iter()
+                .fold((usize::MAX, usize::MAX, 0, 0), |b, &p| {
+                    let (u, v) = (p as usize % w, p as usize / w);
+                    (b.0.min(u), b.1.min(v), b.2.max(u), b.3.max(v))
+                });
+        println!(
+            "plane {i}: n [{:+.4} {:+.4} {:+.4}] d {:.3} inliers {} bottom {} centroid [{:.2} {:.2} {:.2}] up-angle {:.2} bbox u {u0}..{u1} v {v0}..{v1}",
+            s.plane.normal.x, s.plane.normal.y, s.plane.normal.z, s.plane.d, s.inliers, s.bottom_inliers,
+            s.centroid.x, s.centroid.y, s.centroid.z,
+            up.map_or(f64::NAN, |u| angle_between_deg(&s.plane.normal, &u))
+        );
+    }
+    // Label image: depth in grey, planes in colour.
+    let palette: [[u8; 3]; 10] = [
+        [230, 25, 75], [60, 180, 75], [255, 225, 25], [0, 130, 200], [245, 130, 48],
+        [145, 30, 180], [70, 240, 240], [240, 50, 230], [210, 245, 60], [250, 190, 212],
+    ];
+    let mut rgb = vec![0u8; w * view.height * 3];
+    for (i, p) in view.points.iter().enumerate() {
+        if p.z_m.is_finite() {
+            let g = (255.0 - (p.z_m * 50.0).min(200.0)) as u8 / 2;
+            rgb[3 * i..3 * i + 3].copy_from_slice(&[g, g, g]);
+        }
+    }
+    for (k, p) in planes.iter().enumerate() {
+        for &i in &p.inliers {
+            let i = i as usize;
+            rgb[3 * i..3 * i + 3].copy_from_slice(&palette[k % 10]);
+        }
+    }
+    let out = format!("/tmp/labels_{}.png", std::path::Path::new(&dir).file_name().unwrap().to_string_lossy());
+    let file = std::fs::File::create(&out).expect("png");
+    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), w as u32, view.height as u32);
+    enc.set_color(png::ColorType::Rgb);
+    enc.set_depth(png::BitDepth::Eight);
+    enc.write_header().expect("png").write_image_data(&rgb).expect("png");
+    println!("labels in {out} (plane k = palette k: red, green, yellow, blue, orange, purple, cyan, magenta, lime, pink)");
+    let sel = select_planes(&summaries, up, &config.selection);
+    println!("selection: {sel:?}");
+    let Ok(sel) = sel else { return };
+    let mut chosen = vec![("inclined", sel.inclined)];
+    if let GroundSource::Plane(g) = sel.ground {
+        chosen.push(("ground", g));
+    }
+    let mut means = Vec::new();
+    for (name, idx) in chosen {
+        let mut pt = PassThrough::new();
+        let (members, range) = pt.filter(
+            view.points,
+            &planes[idx].inliers,
+            config.pass_through.max_points,
+        );
+        let members = members.to_vec();
+        let mut ne = NormalEstimator::new();
+        let (normals, nstats) = ne.estimate(&view, &members, &config.normals, &Vector3::zeros());
+        let normals = normals.to_vec();
+        let mut km = CosineKmeans::new();
+        let c = km
+            .cluster(
+                &normals,
+                config.kmeans.clusters,
+                config.kmeans.max_iterations,
+                config.kmeans.merge_spread_ratio,
+            )
+            .expect("clusters");
+        let kept: Vector3<f64> = km.kept_members(&c).sum();
+        let all: Vector3<f64> = normals.iter().filter(|n| n.x.is_finite()).sum();
+        println!(
+            "{name}: range {range:?}\n   normals {nstats:?} clusters {:?} kept {:?} spread {:.2} centre angles {:?}\n   kept-mean vs tls {:.3} deg, all-mean vs tls {:.3}",
+            c.counts,
+            c.kept,
+            c.spread_deg,
+            c.centres.iter().map(|x| format!("{:.2}", angle_between_deg(x, &c.centres[c.dominant]))).collect::<Vec<_>>(),
+            angle_between_deg(&kept, &planes[idx].plane.normal),
+            angle_between_deg(&all, &planes[idx].plane.normal),
+        );
+        means.push((kept, planes[idx].plane.normal));
+    }
+    if means.len() == 2 {
+        println!(
+            "angle of kept means {:.3}, of TLS planes {:.3}",
+            angle_between_deg(&means[0].0, &means[1].0),
+            angle_between_deg(&means[0].1, &means[1].1)
+        );
+    }
+}

@@ -1,0 +1,79 @@
+//! Runs the estimator over recordings and prints, per recording and method,
+//! the median slope, its error against `[truth]` and the mean stage timings.
+//!
+//! `cargo run --release -p slope-pipeline --example eval_recordings -- DIR...`
+
+#[path = "../tests/common/mod.rs"]
+mod common;
+
+use std::path::Path;
+
+use slope_pipeline::{Estimator, EstimatorConfig, SlopeMethod};
+
+fn main() {
+    let dirs: Vec<String> = std::env::args().skip(1).collect();
+    let methods: Vec<SlopeMethod> = match std::env::var("METHODS") {
+        Ok(m) => m
+            .split(',')
+            .filter_map(slope_pipeline::parse_method)
+            .collect(),
+        Err(_) => SlopeMethod::ALL.to_vec(),
+    };
+    for method in methods {
+        let mut est = Estimator::new(EstimatorConfig {
+            method,
+            ..EstimatorConfig::default()
+        });
+        for dir in &dirs {
+            let rec = match common::Recording::open(Path::new(dir)) {
+                Ok(r) => r,
+                Err(e) => {
+                    eprintln!("{e}");
+                    continue;
+                }
+            };
+            let mut slopes = Vec::new();
+            let mut stds = Vec::new();
+            let mut stages: Vec<(&'static str, f64)> = Vec::new();
+            let mut total = 0.0;
+            let mut statuses = Vec::new();
+            let n = rec.depth_files.len();
+            for k in 0..n {
+                let frame = rec.frame(k).expect("frame");
+                let e = est.estimate(&frame.view());
+                statuses.push(e.status.name());
+                if e.slope_deg.is_finite() {
+                    slopes.push(e.slope_deg);
+                    stds.push(e.slope_std_deg);
+                }
+                total += e.timings.total_ms;
+                for (name, ms) in &e.timings.stages {
+                    match stages.iter_mut().find(|(m, _)| m == name) {
+                        Some((_, t)) => *t += ms,
+                        None => stages.push((name, *ms)),
+                    }
+                }
+            }
+            slopes.sort_by(f64::total_cmp);
+            let median = slopes.get(slopes.len() / 2).copied().unwrap_or(f64::NAN);
+            let truth = rec.truth_slope_deg.unwrap_or(f64::NAN);
+            let ok = statuses.iter().filter(|s| **s == "ok").count();
+            let st: Vec<String> = stages
+                .iter()
+                .map(|(s, ms)| format!("{s} {:.1}", ms / n as f64))
+                .collect();
+            println!(
+                "{:<14} {:<40} median {:8.3} |err| {:6.3} ok {ok}/{n} min {:.2} max {:.2} std {:.2}  {:.1} ms [{}]",
+                method.name(),
+                dir,
+                median,
+                (median.abs() - truth).abs(),
+                slopes.first().copied().unwrap_or(f64::NAN),
+                slopes.last().copied().unwrap_or(f64::NAN),
+                stds.first().copied().unwrap_or(f64::NAN),
+                total / n as f64,
+                st.join(", ")
+            );
+        }
+    }
+}

@@ -1,0 +1,867 @@
+//! `slope-eval`: runs the estimator in-process (no IPC) on every frame of
+//! one or more recordings and reports accuracy against the recordings'
+//! ground truth and per-stage timings, as a table or as JSON lines, and
+//! optionally as pictures of the planes found.
+//!
+//! Per frame: decode the depth PNG, project it with the recording's
+//! intrinsics, run one [`Estimator`] per method on the same cloud. A frame
+//! whose image cannot be read is reported as `bad_frame` with the reader's
+//! error and the evaluation goes on; a recording that cannot be opened is
+//! reported by name, the others are still evaluated, and the program exits
+//! non-zero at the end ([`EvalOutcome::check`]).
+//!
+//! Accuracy: the ground truth of a recording is unsigned (0..90 degrees, the
+//! angle between the two planes), the estimates are signed (+ uphill), so the
+//! error compares magnitudes: `abs_error_deg = |median(|slope_deg|) - truth_deg|`
+//! over the frames whose status is `ok`.
+
+use std::collections::HashMap;
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context};
+use clap::Parser;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use serde::ser::SerializeMap;
+use serde::{Serialize, Serializer};
+use slope_ipc_types::{CloudPoint, EstimateStatus, Mount, SlopeMethod, DEFAULT_SERVICE_PREFIX};
+use slope_pipeline::{CloudView, Estimate, Estimator, EstimatorConfig, StageTimings};
+use slope_sensor::recording::{DepthImage, Recording};
+
+use crate::cli::CommonArgs;
+use crate::demo::median;
+use crate::estimator::{load_config, method_arg};
+use crate::render::{mount_ground_plane, render_planes, write_png, PlaneOverlay};
+use crate::replay::positive_f64;
+
+/// Default distance from a plane within which `--render` tints a pixel.
+pub const DEFAULT_RENDER_TOLERANCE_M: f64 = 0.03;
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "slope-eval",
+    version,
+    about = "Run the slope estimator offline on recordings: accuracy against ground truth, per-stage timings",
+    long_about = "Runs the estimator in this process (no IPC) on each frame of each recording and \
+reports, per recording and method: frames, frames with status ok, the median signed slope, the \
+ground truth, the error and the median processing time, with a per-stage breakdown.\n\n\
+Ground truth is the frame's slope_deg cell in frames.csv when present, else [truth] slope_deg in \
+recording.toml; a recording's truth is the median of its frames' truths. Truth is unsigned (the \
+angle between the two planes, 0..90 degrees) while estimates are signed (+ uphill, - downhill), so \
+the error is computed on magnitudes:\n  \
+abs_error_deg = | median over ok frames of |slope_deg|  -  truth_deg |\n\
+(median_frame_error_deg in the JSON is the median of the per-frame | |slope_deg| - truth |).\n\n\
+A frame whose depth image cannot be read is reported with status bad_frame and its error; the \
+evaluation goes on. A recording that cannot be opened is reported by name, the others are still \
+evaluated, and the exit status is non-zero.",
+    after_help = "Examples:
+  slope-eval tests/recordings/ramp16                       # table: paper method
+  slope-eval tests/recordings/* --method all               # the three methods side by side
+  slope-eval REC --json | jq .summary                      # one JSON object per recording and method
+  slope-eval REC --config estimator.toml --seed 7          # parameters from a file, another seed
+  slope-eval REC --render out/ --render-frame 12           # PNG: ground red, inclined plane blue"
+)]
+pub struct EvalArgs {
+    /// Recording directories (each holds recording.toml and frames.csv).
+    #[arg(required = true, value_name = "RECORDING")]
+    pub recordings: Vec<PathBuf>,
+
+    /// Fit used for the planes: paper, least-squares, tls, or all (the three
+    /// side by side). Default: the config file's method, else paper.
+    #[arg(long, value_parser = method_choice_arg)]
+    pub method: Option<MethodChoice>,
+
+    /// TOML file with estimator parameters (see the pipeline README);
+    /// missing keys keep the paper's defaults.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+
+    /// Seed of every random draw of the estimator (RANSAC, averaging);
+    /// overrides the config file.
+    #[arg(long)]
+    pub seed: Option<u64>,
+
+    /// Evaluate at most this many frames of each recording (the first ones).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    pub max_frames: Option<u64>,
+
+    /// Print one JSON object per recording and method, one per line, instead
+    /// of the table.
+    #[arg(long)]
+    pub json: bool,
+
+    /// Write, per recording and method, a PNG of one frame into DIR: depth in
+    /// grey, pixels near the ground plane red, near the inclined plane blue.
+    #[arg(long, value_name = "DIR")]
+    pub render: Option<PathBuf>,
+
+    /// The frame to render (its index in frames.csv); default: the middle
+    /// one of the evaluated frames.
+    #[arg(long, value_name = "INDEX", requires = "render")]
+    pub render_frame: Option<u64>,
+
+    /// Pixels within this distance of a plane are tinted, metres.
+    #[arg(long, default_value_t = DEFAULT_RENDER_TOLERANCE_M, value_parser = positive_f64)]
+    pub render_tolerance_m: f64,
+
+    /// More log output (-v debug, -vv trace). RUST_LOG overrides.
+    #[arg(short, long, action = clap::ArgAction::Count)]
+    pub verbose: u8,
+
+    /// Less log output (errors only) and no progress bar.
+    #[arg(short, long, conflicts_with = "verbose")]
+    pub quiet: bool,
+}
+
+impl EvalArgs {
+    /// Sets up `tracing` to stderr, as every slope program does.
+    pub fn init_logging(&self) {
+        CommonArgs {
+            service_prefix: DEFAULT_SERVICE_PREFIX.to_string(),
+            verbose: self.verbose,
+            quiet: self.quiet,
+        }
+        .init_logging();
+    }
+}
+
+/// `--method`: one method, or all three.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MethodChoice {
+    One(SlopeMethod),
+    All,
+}
+
+pub fn method_choice_arg(text: &str) -> Result<MethodChoice, String> {
+    if text == "all" {
+        return Ok(MethodChoice::All);
+    }
+    method_arg(text)
+        .map(MethodChoice::One)
+        .map_err(|_| format!("unknown method '{text}': expected paper, least-squares, tls or all"))
+}
+
+/// The estimator configurations `args` asks for, one per method, in the
+/// order of [`SlopeMethod::ALL`] for `--method all`.
+pub fn configs(args: &EvalArgs) -> anyhow::Result<Vec<EstimatorConfig>> {
+    let methods: Vec<Option<SlopeMethod>> = match args.method {
+        None => vec![None],
+        Some(MethodChoice::One(method)) => vec![Some(method)],
+        Some(MethodChoice::All) => SlopeMethod::ALL.into_iter().map(Some).collect(),
+    };
+    methods
+        .into_iter()
+        .map(|method| {
+            let mut config = load_config(args.config.as_ref(), method)?;
+            if let Some(seed) = args.seed {
+                config.seed = seed;
+            }
+            Ok(config)
+        })
+        .collect()
+}
+
+/// What became of one frame under one method.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FrameResult {
+    /// The frame's `index` in frames.csv.
+    pub index: u64,
+    pub status: &'static str,
+    /// Signed slope, degrees (+ uphill); `None` unless `ok`.
+    pub slope_deg: Option<f64>,
+    /// Spread of the averaged angle samples, degrees; `None` unless `ok`.
+    pub std_deg: Option<f64>,
+    /// Distance to the inclined plane along the optical axis, metres;
+    /// `None` unless `ok`.
+    pub distance_m: Option<f64>,
+    /// The frame's ground truth, degrees, if the recording has one.
+    pub truth_deg: Option<f64>,
+    /// Milliseconds, total and per stage; `None` when the frame could not be
+    /// read (the estimator did not run).
+    pub ms: Option<Timings>,
+    /// Why the frame is `bad_frame`.
+    pub error: Option<String>,
+}
+
+/// Stage timings serialised as `{"total": ms, "<stage>": ms, ...}` in
+/// pipeline order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Timings(pub StageTimings);
+
+impl Serialize for Timings {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        let mut map = serializer.serialize_map(Some(self.0.stages.len() + 1))?;
+        map.serialize_entry("total", &self.0.total_ms)?;
+        for (name, ms) in &self.0.stages {
+            map.serialize_entry(name, ms)?;
+        }
+        map.end()
+    }
+}
+
+/// Named medians, serialised as a JSON object in their order.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct StageMedians(pub Vec<(String, f64)>);
+
+impl Serialize for StageMedians {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        let mut map = serializer.serialize_map(Some(self.0.len()))?;
+        for (name, ms) in &self.0 {
+            map.serialize_entry(name, ms)?;
+        }
+        map.end()
+    }
+}
+
+/// The numbers of one recording under one method.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Summary {
+    /// Frames evaluated.
+    pub frames: usize,
+    /// Frames with status `ok`.
+    pub ok_frames: usize,
+    /// Median signed slope of the `ok` frames, degrees.
+    pub median_slope_deg: Option<f64>,
+    /// Median of `|slope_deg|` over the `ok` frames, degrees.
+    pub median_abs_slope_deg: Option<f64>,
+    /// `|median_abs_slope_deg - truth_deg|`; `None` without truth.
+    pub abs_error_deg: Option<f64>,
+    /// Median over the `ok` frames with truth of `| |slope_deg| - truth |`.
+    pub median_frame_error_deg: Option<f64>,
+    /// Median total processing time of the frames the estimator ran on.
+    pub median_ms: Option<f64>,
+    /// Median time of each stage over the frames it ran in, pipeline order.
+    pub median_stage_ms: StageMedians,
+    /// Frames per status other than `ok`.
+    pub not_ok: StatusCounts,
+}
+
+/// Status name and count, serialised as a JSON object.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct StatusCounts(pub Vec<(&'static str, usize)>);
+
+impl Serialize for StatusCounts {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        let mut map = serializer.serialize_map(Some(self.0.len()))?;
+        for (name, count) in &self.0 {
+            map.serialize_entry(name, count)?;
+        }
+        map.end()
+    }
+}
+
+/// One recording under one method: the JSON object of one output line.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MethodReport {
+    /// The recording directory as given on the command line.
+    pub recording: String,
+    #[serde(serialize_with = "method_name")]
+    pub method: SlopeMethod,
+    /// Median of the evaluated frames' truths; `None` without truth.
+    pub truth_deg: Option<f64>,
+    pub estimates: Vec<FrameResult>,
+    pub summary: Summary,
+}
+
+fn method_name<S: Serializer>(method: &SlopeMethod, serializer: S) -> Result<S::Ok, S::Error> {
+    serializer.serialize_str(method.name())
+}
+
+impl MethodReport {
+    /// The report of `frames`; the truth and the summary are computed here.
+    pub fn new(recording: String, method: SlopeMethod, estimates: Vec<FrameResult>) -> Self {
+        let mut truths: Vec<f64> = estimates.iter().filter_map(|f| f.truth_deg).collect();
+        let truth_deg = median(&mut truths);
+        let summary = summarize(&estimates, truth_deg);
+        Self {
+            recording,
+            method,
+            truth_deg,
+            estimates,
+            summary,
+        }
+    }
+}
+
+/// The summary of `frames` against the recording's `truth_deg`.
+pub fn summarize(frames: &[FrameResult], truth_deg: Option<f64>) -> Summary {
+    let ok: Vec<&FrameResult> = frames.iter().filter(|f| f.status == "ok").collect();
+    let mut slopes: Vec<f64> = ok.iter().filter_map(|f| f.slope_deg).collect();
+    let mut magnitudes: Vec<f64> = slopes.iter().map(|s| s.abs()).collect();
+    let mut frame_errors: Vec<f64> = ok
+        .iter()
+        .filter_map(|f| Some((f.slope_deg?.abs() - f.truth_deg?).abs()))
+        .collect();
+    let median_abs_slope_deg = median(&mut magnitudes);
+    let mut totals: Vec<f64> = frames
+        .iter()
+        .filter_map(|f| f.ms.as_ref().map(|t| t.0.total_ms))
+        .collect();
+
+    let mut stage_names: Vec<&'static str> = Vec::new();
+    let mut stage_times: HashMap<&'static str, Vec<f64>> = HashMap::new();
+    for timings in frames.iter().filter_map(|f| f.ms.as_ref()) {
+        for &(name, ms) in &timings.0.stages {
+            if !stage_names.contains(&name) {
+                stage_names.push(name);
+            }
+            stage_times.entry(name).or_default().push(ms);
+        }
+    }
+    let median_stage_ms = stage_names
+        .iter()
+        .filter_map(|name| {
+            let ms = median(stage_times.get_mut(name)?)?;
+            Some((name.to_string(), ms))
+        })
+        .collect();
+
+    let not_ok = EstimateStatus::ALL
+        .into_iter()
+        .filter(|s| *s != EstimateStatus::Ok)
+        .map(|s| (s.name(), frames.iter().filter(|f| f.status == s.name()).count()))
+        .filter(|(_, count)| *count > 0)
+        .collect();
+
+    Summary {
+        frames: frames.len(),
+        ok_frames: ok.len(),
+        median_slope_deg: median(&mut slopes),
+        median_abs_slope_deg,
+        abs_error_deg: median_abs_slope_deg
+            .zip(truth_deg)
+            .map(|(m, t)| (m - t).abs()),
+        median_frame_error_deg: median(&mut frame_errors),
+        median_ms: median(&mut totals),
+        median_stage_ms: StageMedians(median_stage_ms),
+        not_ok: StatusCounts(not_ok),
+    }
+}
+
+/// The result of a frame the estimator ran on.
+pub fn frame_result(index: u64, truth_deg: Option<f64>, estimate: &Estimate) -> FrameResult {
+    let ok = estimate.status == EstimateStatus::Ok;
+    let when_ok = |v: f64| (ok && v.is_finite()).then_some(v);
+    FrameResult {
+        index,
+        status: estimate.status.name(),
+        slope_deg: when_ok(estimate.slope_deg),
+        std_deg: when_ok(estimate.slope_std_deg),
+        distance_m: when_ok(estimate.distance_m),
+        truth_deg,
+        ms: Some(Timings(estimate.timings.clone())),
+        error: (estimate.status == EstimateStatus::BadFrame)
+            .then(|| "the estimator rejected the cloud (size mismatch or empty)".to_string()),
+    }
+}
+
+/// What a run produced, and which recordings failed.
+#[derive(Debug, Default)]
+pub struct EvalOutcome {
+    pub reports: Vec<MethodReport>,
+    /// One message per recording that could not be evaluated (or rendered).
+    pub failures: Vec<String>,
+}
+
+impl EvalOutcome {
+    /// An error naming the failed recordings, if any.
+    pub fn check(&self) -> anyhow::Result<()> {
+        if self.failures.is_empty() {
+            return Ok(());
+        }
+        bail!(
+            "{} problem(s): {}",
+            self.failures.len(),
+            self.failures.join("; ")
+        )
+    }
+}
+
+/// The frame kept for `--render`: its cloud and each method's estimate.
+struct RenderFrame {
+    index: u64,
+    points: Vec<CloudPoint>,
+    estimates: Vec<Estimate>,
+}
+
+/// Evaluates every recording of `args`, printing each report as it is done
+/// (table or JSON lines on stdout). Failures are logged and collected, not
+/// returned: call [`EvalOutcome::check`] for the exit status.
+pub fn run(args: &EvalArgs) -> anyhow::Result<EvalOutcome> {
+    let configs = configs(args)?;
+    if let Some(dir) = &args.render {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create the render directory {}", dir.display()))?;
+    }
+    let mut outcome = EvalOutcome::default();
+    let mut opened = Vec::new();
+    for path in &args.recordings {
+        match Recording::open(path) {
+            Ok(recording) => opened.push((path, recording)),
+            Err(err) => {
+                let message = format!("cannot evaluate {}: {err}", path.display());
+                tracing::error!("{message}");
+                outcome.failures.push(message);
+            }
+        }
+    }
+    let frame_limit = |recording: &Recording| {
+        let max = args
+            .max_frames
+            .and_then(|m| usize::try_from(m).ok())
+            .unwrap_or(usize::MAX);
+        recording.frames().len().min(max)
+    };
+    let total: usize = opened.iter().map(|(_, r)| frame_limit(r)).sum();
+    let bar = progress_bar(args.quiet, total * configs.len());
+    let mut estimators: Vec<Estimator> = configs.into_iter().map(Estimator::new).collect();
+    let label_width = args
+        .recordings
+        .iter()
+        .map(|p| p.display().to_string().chars().count())
+        .max()
+        .unwrap_or(0)
+        .max("recording".len());
+    if !args.json && !opened.is_empty() {
+        if !print_line(&bar, &table_header(label_width))? {
+            return Ok(outcome);
+        }
+    }
+    let mut render_names = RenderNames::default();
+
+    for (path, recording) in &opened {
+        let label = path.display().to_string();
+        bar.set_prefix(short_name(path));
+        let frames = &recording.frames()[..frame_limit(recording)];
+        let render_index = match (&args.render, args.render_frame) {
+            (None, _) => None,
+            (Some(_), Some(index)) => Some(index),
+            (Some(_), None) => frames.get(frames.len() / 2).map(|f| f.index),
+        };
+        let (reports, kept) =
+            evaluate_recording(recording, &label, frames, &mut estimators, render_index, &bar);
+        for report in &reports {
+            let text = if args.json {
+                serde_json::to_string(report).context("cannot format the report as JSON")?
+            } else {
+                table_rows(report, label_width)
+            };
+            if !print_line(&bar, &text)? {
+                // The reader went away (`slope-eval ... | head`): stop quietly.
+                bar.finish_and_clear();
+                return Ok(outcome);
+            }
+        }
+        if let (Some(dir), Some(index)) = (&args.render, render_index) {
+            let name = render_names.claim(path);
+            let evaluated = frames.iter().any(|f| f.index == index);
+            let target = RenderTarget {
+                dir,
+                name: &name,
+                index,
+                evaluated,
+                tolerance_m: args.render_tolerance_m,
+            };
+            if let Err(err) = render(&target, kept, recording, &label) {
+                let message = format!("{err:#}");
+                bar.suspend(|| tracing::error!("{message}"));
+                outcome.failures.push(message);
+            }
+        }
+        outcome.reports.extend(reports);
+    }
+    bar.finish_and_clear();
+    Ok(outcome)
+}
+
+/// Writes one line to stdout without disturbing the progress bar. `false`
+/// when stdout is a closed pipe.
+fn print_line(bar: &ProgressBar, text: &str) -> anyhow::Result<bool> {
+    let written = bar.suspend(|| {
+        let mut stdout = std::io::stdout().lock();
+        writeln!(stdout, "{text}").and_then(|()| stdout.flush())
+    });
+    match written {
+        Ok(()) => Ok(true),
+        Err(err) if err.kind() == std::io::ErrorKind::BrokenPipe => Ok(false),
+        Err(err) => Err(err).context("cannot write the results to stdout"),
+    }
+}
+
+/// Runs every estimator on every frame of one recording.
+fn evaluate_recording(
+    recording: &Recording,
+    label: &str,
+    frames: &[slope_sensor::recording::FrameEntry],
+    estimators: &mut [Estimator],
+    render_index: Option<u64>,
+    bar: &ProgressBar,
+) -> (Vec<MethodReport>, Option<RenderFrame>) {
+    let projector = recording.projector();
+    let mut depth = DepthImage::default();
+    let mut points = vec![CloudPoint::INVALID; projector.len()];
+    let mut results: Vec<Vec<FrameResult>> = vec![Vec::with_capacity(frames.len()); estimators.len()];
+    let mut render = None;
+    let meta = recording.meta();
+    let (width, height) = (meta.depth.width as usize, meta.depth.height as usize);
+    for frame in frames {
+        let truth_deg = recording.truth_deg(frame);
+        match recording.read_depth_into(frame, &mut depth) {
+            Err(err) => {
+                let error = err.to_string();
+                bar.suspend(|| {
+                    tracing::warn!(recording = label, frame = frame.index, "bad frame: {error}")
+                });
+                for per_method in &mut results {
+                    per_method.push(FrameResult {
+                        index: frame.index,
+                        status: EstimateStatus::BadFrame.name(),
+                        slope_deg: None,
+                        std_deg: None,
+                        distance_m: None,
+                        truth_deg,
+                        ms: None,
+                        error: Some(error.clone()),
+                    });
+                }
+                bar.inc(estimators.len() as u64);
+            }
+            Ok(()) => {
+                projector.project_into(&depth.data, None, &mut points);
+                let view = CloudView {
+                    points: &points,
+                    width,
+                    height,
+                    intrinsics: recording.intrinsics(),
+                    mount: recording.mount(),
+                };
+                let mut kept = Vec::new();
+                for (estimator, per_method) in estimators.iter_mut().zip(&mut results) {
+                    let estimate = estimator.estimate(&view);
+                    tracing::debug!(
+                        recording = label,
+                        frame = frame.index,
+                        method = estimate.method.name(),
+                        status = estimate.status.name(),
+                        slope_deg = estimate.slope_deg,
+                        ms = estimate.timings.total_ms,
+                        "estimated"
+                    );
+                    per_method.push(frame_result(frame.index, truth_deg, &estimate));
+                    if render_index == Some(frame.index) {
+                        kept.push(estimate);
+                    }
+                    bar.inc(1);
+                }
+                if render_index == Some(frame.index) {
+                    render = Some(RenderFrame {
+                        index: frame.index,
+                        points: points.clone(),
+                        estimates: kept,
+                    });
+                }
+            }
+        }
+    }
+    let reports = estimators
+        .iter()
+        .zip(results)
+        .map(|(estimator, estimates)| {
+            MethodReport::new(label.to_string(), estimator.config().method, estimates)
+        })
+        .collect();
+    (reports, render)
+}
+
+/// Where and what `--render` draws for one recording.
+struct RenderTarget<'a> {
+    dir: &'a Path,
+    /// File-name stem.
+    name: &'a str,
+    /// The frame index asked for.
+    index: u64,
+    /// Whether that frame was among the evaluated ones.
+    evaluated: bool,
+    tolerance_m: f64,
+}
+
+/// Writes one PNG per method of the kept frame into the target directory.
+fn render(
+    target: &RenderTarget<'_>,
+    frame: Option<RenderFrame>,
+    recording: &Recording,
+    label: &str,
+) -> anyhow::Result<()> {
+    let index = target.index;
+    let Some(frame) = frame else {
+        if target.evaluated {
+            bail!("cannot render frame {index} of {label}: its depth image could not be read");
+        }
+        bail!("cannot render frame {index} of {label}: no such frame was evaluated");
+    };
+    let meta = recording.meta();
+    let mount: Mount = recording.mount();
+    for estimate in &frame.estimates {
+        let ground = match (estimate.ground, estimate.ground_from_mount) {
+            (Some(plane), _) => Some(plane.coefficients),
+            (None, true) => mount_ground_plane(&mount),
+            (None, false) => None,
+        };
+        let overlay = PlaneOverlay {
+            ground,
+            inclined: estimate.inclined.map(|p| p.coefficients),
+            tolerance_m: target.tolerance_m,
+        };
+        let image = render_planes(&frame.points, meta.depth.width, meta.depth.height, &overlay);
+        let path = target.dir.join(format!(
+            "{}-{}-frame{:06}.png",
+            target.name,
+            estimate.method.name(),
+            frame.index
+        ));
+        write_png(&path, &image)
+            .with_context(|| format!("cannot render frame {index} of {label}"))?;
+        tracing::info!(path = %path.display(), status = estimate.status.name(), "rendered");
+    }
+    Ok(())
+}
+
+/// File-name stems for rendered pictures: the recording's directory name,
+/// with `-2`, `-3`, ... when two recordings share it.
+#[derive(Debug, Default)]
+struct RenderNames {
+    used: HashMap<String, usize>,
+}
+
+impl RenderNames {
+    fn claim(&mut self, path: &Path) -> String {
+        let base = short_name(path);
+        let count = self.used.entry(base.clone()).or_insert(0);
+        *count += 1;
+        if *count == 1 {
+            base
+        } else {
+            format!("{base}-{count}")
+        }
+    }
+}
+
+/// The last component of a recording's path ("recording" if it has none).
+fn short_name(path: &Path) -> String {
+    path.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "recording".to_string())
+}
+
+fn progress_bar(quiet: bool, len: usize) -> ProgressBar {
+    if quiet || !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::with_draw_target(Some(len as u64), ProgressDrawTarget::stderr());
+    // The template is a constant; should it ever fail to parse, the default
+    // style is still a working bar.
+    if let Ok(style) =
+        ProgressStyle::with_template("{prefix:>20} [{bar:30}] {pos}/{len} frame runs, {eta} left")
+    {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar
+}
+
+/// The header line of the table.
+pub fn table_header(label_width: usize) -> String {
+    format!(
+        "{:<label_width$}  {:<13}  {:>6}  {:>6}  {:>12}  {:>8}  {:>8}  {:>9}",
+        "recording", "method", "frames", "ok", "median slope", "truth", "|error|", "median ms"
+    )
+}
+
+/// The table row of a report and its indented detail lines (per-stage
+/// medians, frames that are not ok, the first bad frame's error).
+pub fn table_rows(report: &MethodReport, label_width: usize) -> String {
+    let s = &report.summary;
+    let deg = |v: Option<f64>, signed: bool| match v {
+        Some(v) if signed => format!("{v:+.2}°"),
+        Some(v) => format!("{v:.2}°"),
+        None => "-".to_string(),
+    };
+    let mut text = format!(
+        "{:<label_width$}  {:<13}  {:>6}  {:>6}  {:>12}  {:>8}  {:>8}  {:>9}",
+        report.recording,
+        report.method.name(),
+        s.frames,
+        s.ok_frames,
+        deg(s.median_slope_deg, true),
+        deg(report.truth_deg, false),
+        deg(s.abs_error_deg, false),
+        s.median_ms.map_or("-".to_string(), |ms| format!("{ms:.1}")),
+    );
+    if !s.median_stage_ms.0.is_empty() {
+        let stages: Vec<String> = s
+            .median_stage_ms
+            .0
+            .iter()
+            .map(|(name, ms)| format!("{name} {ms:.2}"))
+            .collect();
+        text.push_str(&format!("\n    stages (median ms): {}", stages.join(", ")));
+    }
+    if !s.not_ok.0.is_empty() {
+        let counts: Vec<String> = s
+            .not_ok
+            .0
+            .iter()
+            .map(|(name, count)| format!("{name} {count}"))
+            .collect();
+        text.push_str(&format!("\n    not ok: {}", counts.join(", ")));
+    }
+    if let Some(bad) = report.estimates.iter().find(|f| f.error.is_some()) {
+        if let Some(error) = &bad.error {
+            text.push_str(&format!("\n    first bad frame ({}): {error}", bad.index));
+        }
+    }
+    text
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ok_frame(index: u64, slope: f64, truth: Option<f64>, total_ms: f64) -> FrameResult {
+        FrameResult {
+            index,
+            status: "ok",
+            slope_deg: Some(slope),
+            std_deg: Some(0.1),
+            distance_m: Some(2.0),
+            truth_deg: truth,
+            ms: Some(Timings(StageTimings {
+                total_ms,
+                stages: vec![("outlier", total_ms / 2.0), ("ransac", total_ms / 4.0)],
+            })),
+            error: None,
+        }
+    }
+
+    fn failed_frame(index: u64, status: EstimateStatus, ms: Option<f64>) -> FrameResult {
+        FrameResult {
+            index,
+            status: status.name(),
+            slope_deg: None,
+            std_deg: None,
+            distance_m: None,
+            truth_deg: Some(10.0),
+            ms: ms.map(|total_ms| {
+                Timings(StageTimings {
+                    total_ms,
+                    stages: vec![("outlier", total_ms)],
+                })
+            }),
+            error: None,
+        }
+    }
+
+    #[test]
+    fn summary_compares_magnitudes_with_truth() {
+        let frames = vec![
+            ok_frame(0, -9.0, Some(10.0), 4.0),
+            ok_frame(1, 12.0, Some(10.0), 8.0),
+            ok_frame(2, 10.5, Some(10.0), 6.0),
+            failed_frame(3, EstimateStatus::NoInclinedPlane, Some(1.0)),
+            failed_frame(4, EstimateStatus::BadFrame, None),
+        ];
+        let report = MethodReport::new("r".into(), SlopeMethod::Paper, frames);
+        let s = &report.summary;
+        assert_eq!(report.truth_deg, Some(10.0));
+        assert_eq!((s.frames, s.ok_frames), (5, 3));
+        assert_eq!(s.median_slope_deg, Some(10.5));
+        // |slope| = 9, 12, 10.5 -> median 10.5; error 0.5.
+        assert_eq!(s.median_abs_slope_deg, Some(10.5));
+        assert_eq!(s.abs_error_deg, Some(0.5));
+        // Per-frame errors 1, 2, 0.5 -> median 1.
+        assert_eq!(s.median_frame_error_deg, Some(1.0));
+        // Totals 4, 8, 6, 1 (the unread frame has none) -> median 5.
+        assert_eq!(s.median_ms, Some(5.0));
+        // outlier: 2, 4, 3, 1 -> 2.5; ransac: 1, 2, 1.5 -> 1.5.
+        assert_eq!(
+            s.median_stage_ms.0,
+            vec![("outlier".to_string(), 2.5), ("ransac".to_string(), 1.5)]
+        );
+        assert_eq!(
+            s.not_ok.0,
+            vec![("no_inclined_plane", 1), ("bad_frame", 1)]
+        );
+    }
+
+    #[test]
+    fn without_truth_or_ok_frames_the_numbers_are_absent() {
+        let report = MethodReport::new(
+            "r".into(),
+            SlopeMethod::Tls,
+            vec![ok_frame(0, 5.0, None, 1.0)],
+        );
+        assert_eq!(report.truth_deg, None);
+        assert_eq!(report.summary.abs_error_deg, None);
+        assert_eq!(report.summary.median_frame_error_deg, None);
+        let failed = MethodReport::new(
+            "r".into(),
+            SlopeMethod::Tls,
+            vec![failed_frame(0, EstimateStatus::NoGround, None)],
+        );
+        assert_eq!(failed.truth_deg, Some(10.0));
+        assert_eq!(failed.summary.median_slope_deg, None);
+        assert_eq!(failed.summary.abs_error_deg, None);
+        assert_eq!(failed.summary.median_ms, None);
+    }
+
+    #[test]
+    fn per_frame_truth_gives_the_median_truth() {
+        let frames = vec![
+            ok_frame(0, 10.0, Some(10.0), 1.0),
+            ok_frame(1, 21.0, Some(20.0), 1.0),
+            ok_frame(2, 30.0, Some(30.0), 1.0),
+            ok_frame(3, 40.0, Some(40.0), 1.0),
+        ];
+        let report = MethodReport::new("r".into(), SlopeMethod::Paper, frames);
+        assert_eq!(report.truth_deg, Some(25.0));
+        assert_eq!(report.summary.median_frame_error_deg, Some(0.0));
+    }
+
+    #[test]
+    fn json_has_the_documented_keys_in_order() {
+        let report = MethodReport::new(
+            "rec".into(),
+            SlopeMethod::LeastSquares,
+            vec![ok_frame(0, 5.0, None, 2.0)],
+        );
+        let text = serde_json::to_string(&report).unwrap();
+        assert!(
+            text.starts_with(
+                "{\"recording\":\"rec\",\"method\":\"least-squares\",\"truth_deg\":null,\"estimates\":[{\"index\":0,\"status\":\"ok\",\"slope_deg\":5.0"
+            ),
+            "{text}"
+        );
+        assert!(
+            text.contains("\"ms\":{\"total\":2.0,\"outlier\":1.0,\"ransac\":0.5}"),
+            "{text}"
+        );
+    }
+
+    #[test]
+    fn method_choices() {
+        assert_eq!(method_choice_arg("all"), Ok(MethodChoice::All));
+        assert_eq!(
+            method_choice_arg("tls"),
+            Ok(MethodChoice::One(SlopeMethod::Tls))
+        );
+        let err = method_choice_arg("magic").unwrap_err();
+        assert!(err.contains("tls or all"), "{err}");
+    }
+
+    #[test]
+    fn render_names_are_unique() {
+        let mut names = RenderNames::default();
+        assert_eq!(names.claim(Path::new("a/ramp")), "ramp");
+        assert_eq!(names.claim(Path::new("b/ramp")), "ramp-2");
+        assert_eq!(names.claim(Path::new("b/wall/")), "wall");
+    }
+}

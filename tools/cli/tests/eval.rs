@@ -1,0 +1,528 @@
+//! `slope-eval` end to end: the real binary on small analytic recordings
+//! written here (flat ground and a ramp, ray-cast pixel by pixel), checked
+//! against the exact geometry and against the numbers it reports itself.
+
+use std::collections::BTreeSet;
+use std::fs::File;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use serde_json::Value;
+use slope_sensor::recording::{
+    DepthImage, DepthInfo, MountInfo, RecordingMeta, RecordingWriter, TruthInfo,
+};
+
+const EVAL: &str = env!("CARGO_BIN_EXE_slope-eval");
+
+// A Kinect v2-like camera 0.6 m above flat ground, pitched 20° down.
+const WIDTH: u32 = 512;
+const HEIGHT: u32 = 424;
+const FX: f64 = 365.0;
+const CX: f64 = 255.5;
+const CY: f64 = 211.5;
+const HEIGHT_M: f64 = 0.6;
+const PITCH_DEG: f64 = -20.0;
+/// The ramp's foot line, metres ahead along the ground.
+const FOOT_M: f64 = 1.5;
+/// The ramp's length along its surface.
+const RAMP_LENGTH_M: f64 = 3.0;
+const MAX_RANGE_M: f64 = 8.0;
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Surface {
+    Ground,
+    Ramp,
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
+    [s * a[0], s * a[1], s * a[2]]
+}
+
+fn lin(a: [f64; 3], s: f64, b: [f64; 3], t: f64) -> [f64; 3] {
+    [
+        s * a[0] + t * b[0],
+        s * a[1] + t * b[1],
+        s * a[2] + t * b[2],
+    ]
+}
+
+/// What pixel (u, v) sees, and its depth along the optical axis: the ray
+/// `t * ((u - cx) / fx, (v - cy) / fy, 1)` against the ground (before the
+/// foot line) and the ramp (rising at `slope_deg` from the foot line).
+fn ray_cast(u: u32, v: u32, slope_deg: f64) -> Option<(Surface, f64)> {
+    let p = PITCH_DEG.to_radians();
+    let up = [0.0, -p.cos(), p.sin()];
+    let forward = [0.0, p.sin(), p.cos()];
+    let (st, ct) = slope_deg.to_radians().sin_cos();
+    let ray = [(f64::from(u) - CX) / FX, (f64::from(v) - CY) / FX, 1.0];
+
+    let mut hits = Vec::new();
+    let down = dot(up, ray);
+    if down < 0.0 {
+        let t = -HEIGHT_M / down;
+        if dot(forward, scale(ray, t)) < FOOT_M {
+            hits.push((Surface::Ground, t));
+        }
+    }
+    let foot = lin(forward, FOOT_M, up, -HEIGHT_M);
+    let normal = lin(up, ct, forward, -st);
+    let uphill = lin(forward, ct, up, st);
+    let facing = dot(normal, ray);
+    if facing != 0.0 {
+        let t = dot(normal, foot) / facing;
+        let along = dot(uphill, lin(ray, t, foot, -1.0));
+        if t > 0.0 && (0.0..=RAMP_LENGTH_M).contains(&along) {
+            hits.push((Surface::Ramp, t));
+        }
+    }
+    hits.into_iter()
+        .filter(|(_, t)| *t <= MAX_RANGE_M)
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+}
+
+fn depth_image(slope_deg: f64) -> DepthImage {
+    let mut image = DepthImage::new(WIDTH, HEIGHT);
+    for v in 0..HEIGHT {
+        for u in 0..WIDTH {
+            if let Some((_, z)) = ray_cast(u, v, slope_deg) {
+                image.data[(v * WIDTH + u) as usize] = (z * 1000.0).round() as u16;
+            }
+        }
+    }
+    image
+}
+
+/// Ground truth of a test recording.
+enum Truth {
+    None,
+    Recording(f64),
+    PerFrame,
+}
+
+/// Writes a recording of one frame per slope into `dir`.
+fn write_recording(dir: &Path, slopes_deg: &[f64], truth: Truth) -> PathBuf {
+    let meta = RecordingMeta {
+        sensor: "analytic".into(),
+        depth: DepthInfo {
+            width: WIDTH,
+            height: HEIGHT,
+            unit_m: 0.001,
+            fx: FX,
+            fy: FX,
+            cx: CX,
+            cy: CY,
+        },
+        mount: MountInfo {
+            height_m: Some(HEIGHT_M),
+            pitch_deg: Some(PITCH_DEG),
+            roll_deg: Some(0.0),
+        },
+        truth: TruthInfo {
+            slope_deg: match truth {
+                Truth::Recording(t) => Some(t),
+                _ => None,
+            },
+        },
+    };
+    let per_frame = matches!(truth, Truth::PerFrame);
+    let mut writer = RecordingWriter::create(dir, &meta, per_frame).unwrap();
+    for (i, &slope) in slopes_deg.iter().enumerate() {
+        let stamp = i as u64 * 33_333_333;
+        let truth = per_frame.then_some(slope);
+        writer
+            .write_frame(stamp, &depth_image(slope), None, truth)
+            .unwrap();
+    }
+    writer.finish().unwrap()
+}
+
+struct Output {
+    success: bool,
+    stdout: String,
+    stderr: String,
+}
+
+fn eval(args: &[&str]) -> Output {
+    let output = Command::new(EVAL)
+        .args(args)
+        .env_remove("RUST_LOG")
+        .output()
+        .unwrap_or_else(|e| panic!("cannot run {EVAL}: {e}"));
+    Output {
+        success: output.status.success(),
+        stdout: String::from_utf8_lossy(&output.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&output.stderr).into_owned(),
+    }
+}
+
+fn json_lines(stdout: &str) -> Vec<Value> {
+    stdout
+        .lines()
+        .map(|line| serde_json::from_str(line).unwrap_or_else(|e| panic!("{e}: {line}")))
+        .collect()
+}
+
+fn keys(value: &Value) -> BTreeSet<&str> {
+    value
+        .as_object()
+        .unwrap_or_else(|| panic!("not an object: {value}"))
+        .keys()
+        .map(String::as_str)
+        .collect()
+}
+
+fn set(names: &[&'static str]) -> BTreeSet<&'static str> {
+    names.iter().copied().collect()
+}
+
+fn median(mut values: Vec<f64>) -> Option<f64> {
+    if values.is_empty() {
+        return None;
+    }
+    values.sort_by(f64::total_cmp);
+    let n = values.len();
+    Some(if n % 2 == 0 {
+        (values[n / 2 - 1] + values[n / 2]) / 2.0
+    } else {
+        values[n / 2]
+    })
+}
+
+fn num(value: &Value) -> f64 {
+    value
+        .as_f64()
+        .unwrap_or_else(|| panic!("not a number: {value}"))
+}
+
+fn path_str(path: &Path) -> &str {
+    path.to_str().unwrap()
+}
+
+/// Checks the keys of a report and that its summary follows from its
+/// estimates; returns the summary.
+fn check_report(report: &Value, truth: Option<f64>) -> &Value {
+    assert_eq!(
+        keys(report),
+        set(&["recording", "method", "truth_deg", "estimates", "summary"])
+    );
+    let estimates = report["estimates"].as_array().unwrap();
+    for estimate in estimates {
+        assert_eq!(
+            keys(estimate),
+            set(&[
+                "index",
+                "status",
+                "slope_deg",
+                "std_deg",
+                "distance_m",
+                "truth_deg",
+                "ms",
+                "error"
+            ]),
+            "{estimate}"
+        );
+    }
+    let summary = &report["summary"];
+    assert_eq!(
+        keys(summary),
+        set(&[
+            "frames",
+            "ok_frames",
+            "median_slope_deg",
+            "median_abs_slope_deg",
+            "abs_error_deg",
+            "median_frame_error_deg",
+            "median_ms",
+            "median_stage_ms",
+            "not_ok"
+        ])
+    );
+    let ok: Vec<&Value> = estimates.iter().filter(|e| e["status"] == "ok").collect();
+    assert_eq!(summary["frames"], estimates.len());
+    assert_eq!(summary["ok_frames"], ok.len());
+    let slopes: Vec<f64> = ok.iter().map(|e| num(&e["slope_deg"])).collect();
+    let median_slope = median(slopes.clone());
+    let median_abs = median(slopes.iter().map(|s| s.abs()).collect());
+    assert_eq!(summary["median_slope_deg"].as_f64(), median_slope);
+    assert_eq!(summary["median_abs_slope_deg"].as_f64(), median_abs);
+    let totals: Vec<f64> = estimates
+        .iter()
+        .filter(|e| !e["ms"].is_null())
+        .map(|e| num(&e["ms"]["total"]))
+        .collect();
+    assert_eq!(summary["median_ms"].as_f64(), median(totals));
+    for estimate in estimates.iter().filter(|e| !e["ms"].is_null()) {
+        // Stages are laps of one clock: they add up to at most the total.
+        let ms = estimate["ms"].as_object().unwrap();
+        let stages: f64 = ms
+            .iter()
+            .filter(|(k, _)| *k != "total")
+            .map(|(_, v)| num(v))
+            .sum();
+        assert!(stages > 0.0 && stages <= num(&ms["total"]) + 1e-9, "{estimate}");
+    }
+    match truth {
+        Some(truth) => {
+            assert_eq!(num(&report["truth_deg"]), truth);
+            let error = (median_abs.unwrap() - truth).abs();
+            assert_eq!(num(&summary["abs_error_deg"]), error);
+        }
+        None => {
+            assert!(report["truth_deg"].is_null());
+            assert!(summary["abs_error_deg"].is_null());
+            assert!(summary["median_frame_error_deg"].is_null());
+            assert!(estimates.iter().all(|e| e["truth_deg"].is_null()));
+        }
+    }
+    summary
+}
+
+#[test]
+fn json_report_of_a_clean_ramp_matches_its_truth() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = write_recording(&dir.path().join("ramp20"), &[20.0; 3], Truth::Recording(20.0));
+    let out = eval(&[path_str(&rec), "--json", "--method", "paper"]);
+    assert!(out.success, "{}", out.stderr);
+    let reports = json_lines(&out.stdout);
+    assert_eq!(reports.len(), 1);
+    let report = &reports[0];
+    assert_eq!(report["recording"], path_str(&rec));
+    assert_eq!(report["method"], "paper");
+    let summary = check_report(report, Some(20.0));
+    assert_eq!(summary["frames"], 3);
+    assert_eq!(summary["ok_frames"], 3);
+    assert!(num(&summary["abs_error_deg"]) < 1.0, "{summary}");
+    let estimates = report["estimates"].as_array().unwrap();
+    let indices: Vec<u64> = estimates.iter().map(|e| e["index"].as_u64().unwrap()).collect();
+    assert_eq!(indices, [0, 1, 2]);
+    for estimate in estimates {
+        assert_eq!(num(&estimate["truth_deg"]), 20.0);
+        assert!(estimate["error"].is_null());
+        // The ramp rises ahead: positive slope; its foot is about 1.5 m
+        // ahead, seen along the optical axis pitched 20° down.
+        assert!(num(&estimate["slope_deg"]) > 0.0);
+        let distance = num(&estimate["distance_m"]);
+        assert!((1.0..3.0).contains(&distance), "{estimate}");
+        for stage in ["outlier", "ransac", "normals", "kmeans", "cumulative"] {
+            assert!(estimate["ms"][stage].is_number(), "{stage}: {estimate}");
+        }
+    }
+}
+
+#[test]
+fn without_truth_the_error_is_null() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = write_recording(&dir.path().join("ramp"), &[15.0; 2], Truth::None);
+    let out = eval(&[path_str(&rec), "--json", "--method", "tls", "-q"]);
+    assert!(out.success, "{}", out.stderr);
+    let reports = json_lines(&out.stdout);
+    assert_eq!(reports.len(), 1);
+    assert_eq!(reports[0]["method"], "tls");
+    let summary = check_report(&reports[0], None);
+    assert_eq!(summary["ok_frames"], 2);
+    assert!((num(&summary["median_abs_slope_deg"]) - 15.0).abs() < 1.0);
+}
+
+#[test]
+fn method_all_reports_the_three_methods() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = write_recording(&dir.path().join("ramp"), &[12.0; 2], Truth::Recording(12.0));
+    let out = eval(&[path_str(&rec), "--json", "--method", "all", "--seed", "3"]);
+    assert!(out.success, "{}", out.stderr);
+    let reports = json_lines(&out.stdout);
+    let methods: Vec<&str> = reports.iter().map(|r| r["method"].as_str().unwrap()).collect();
+    assert_eq!(methods, ["paper", "least-squares", "tls"]);
+    for report in &reports {
+        let summary = check_report(report, Some(12.0));
+        assert!(num(&summary["abs_error_deg"]) < 1.0, "{report}");
+    }
+    // The baselines fit planes, not normals: no normals stage.
+    assert!(reports[0]["summary"]["median_stage_ms"]["normals"].is_number());
+    assert!(reports[2]["summary"]["median_stage_ms"]["normals"].is_null());
+    assert!(reports[2]["summary"]["median_stage_ms"]["fit"].is_number());
+}
+
+#[test]
+fn per_frame_truth_wins_and_the_recording_truth_is_its_median() {
+    let dir = tempfile::tempdir().unwrap();
+    let slopes = [14.0, 22.0, 18.0];
+    let rec = write_recording(&dir.path().join("ramps"), &slopes, Truth::PerFrame);
+    let out = eval(&[path_str(&rec), "--json", "--method", "least-squares"]);
+    assert!(out.success, "{}", out.stderr);
+    let reports = json_lines(&out.stdout);
+    let summary = check_report(&reports[0], Some(18.0));
+    let estimates = reports[0]["estimates"].as_array().unwrap();
+    let mut errors = Vec::new();
+    for (estimate, truth) in estimates.iter().zip(slopes) {
+        assert_eq!(num(&estimate["truth_deg"]), truth);
+        let error = (num(&estimate["slope_deg"]).abs() - truth).abs();
+        assert!(error < 1.0, "{estimate}");
+        errors.push(error);
+    }
+    assert_eq!(
+        summary["median_frame_error_deg"].as_f64(),
+        median(errors)
+    );
+}
+
+#[test]
+fn a_recording_that_does_not_open_is_named_and_the_others_are_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = write_recording(&dir.path().join("good"), &[10.0], Truth::Recording(10.0));
+    let missing = dir.path().join("no-such-recording");
+    let out = eval(&[
+        path_str(&missing),
+        path_str(&good),
+        "--json",
+        "--method",
+        "tls",
+    ]);
+    assert!(!out.success, "exit status 0 despite a missing recording");
+    assert!(out.stderr.contains(path_str(&missing)), "{}", out.stderr);
+    let reports = json_lines(&out.stdout);
+    assert_eq!(reports.len(), 1);
+    assert_eq!(reports[0]["recording"], path_str(&good));
+    assert_eq!(reports[0]["summary"]["ok_frames"], 1);
+}
+
+#[test]
+fn a_bad_frame_is_reported_and_the_others_evaluated() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = write_recording(&dir.path().join("ramp"), &[16.0; 3], Truth::Recording(16.0));
+    std::fs::write(rec.join("depth/000001.png"), b"not a png").unwrap();
+    let out = eval(&[path_str(&rec), "--json", "--method", "tls"]);
+    assert!(out.success, "{}", out.stderr);
+    let reports = json_lines(&out.stdout);
+    let summary = check_report(&reports[0], Some(16.0));
+    assert_eq!(summary["frames"], 3);
+    assert_eq!(summary["ok_frames"], 2);
+    assert_eq!(summary["not_ok"]["bad_frame"], 1);
+    let bad = &reports[0]["estimates"][1];
+    assert_eq!(bad["status"], "bad_frame");
+    assert!(bad["slope_deg"].is_null() && bad["ms"].is_null());
+    let error = bad["error"].as_str().unwrap();
+    assert!(error.contains("000001.png"), "{error}");
+    assert!(out.stderr.contains("000001.png"), "{}", out.stderr);
+}
+
+#[test]
+fn the_table_has_a_row_per_method_and_the_stage_breakdown() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = write_recording(&dir.path().join("ramp"), &[16.0; 3], Truth::Recording(16.0));
+    let out = eval(&[path_str(&rec), "--method", "all", "--max-frames", "2"]);
+    assert!(out.success, "{}", out.stderr);
+    let lines: Vec<&str> = out.stdout.lines().collect();
+    assert!(lines[0].starts_with("recording") && lines[0].contains("median ms"));
+    for method in ["paper", "least-squares", "tls"] {
+        let row = lines
+            .iter()
+            .position(|l| l.starts_with(path_str(&rec)) && l.contains(method))
+            .unwrap_or_else(|| panic!("no row for {method}: {}", out.stdout));
+        // frames = 2 (--max-frames), ok = 2, truth 16.00°.
+        let cells: Vec<&str> = lines[row].split_whitespace().collect();
+        assert_eq!(&cells[2..4], ["2", "2"], "{}", lines[row]);
+        assert_eq!(cells[5], "16.00°", "{}", lines[row]);
+        assert!(lines[row + 1].contains("stages (median ms): outlier"));
+    }
+}
+
+/// Decodes an 8-bit RGB PNG.
+fn read_rgb(path: &Path) -> (u32, u32, Vec<[u8; 3]>) {
+    let decoder = png::Decoder::new(std::io::BufReader::new(File::open(path).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert_eq!(info.color_type, png::ColorType::Rgb);
+    assert_eq!(info.bit_depth, png::BitDepth::Eight);
+    let pixels = buf[..info.buffer_size()]
+        .chunks_exact(3)
+        .map(|c| [c[0], c[1], c[2]])
+        .collect();
+    (info.width, info.height, pixels)
+}
+
+#[test]
+fn render_tints_the_ground_red_and_the_ramp_blue() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = write_recording(&dir.path().join("ramp"), &[20.0; 3], Truth::Recording(20.0));
+    let out_dir = dir.path().join("pictures");
+    let out = eval(&[
+        path_str(&rec),
+        "--method",
+        "all",
+        "--render",
+        path_str(&out_dir),
+        "-q",
+    ]);
+    assert!(out.success, "{}", out.stderr);
+    for method in ["paper", "least-squares", "tls"] {
+        // The middle of three frames.
+        let path = out_dir.join(format!("ramp-{method}-frame000001.png"));
+        let (width, height, pixels) = read_rgb(&path);
+        assert_eq!((width, height), (WIDTH, HEIGHT));
+        if method != "tls" {
+            continue;
+        }
+        // TLS on exact planes: every pixel is tinted after what it sees.
+        let (mut ground, mut ramp, mut ground_red, mut ramp_blue, mut empty_black) =
+            (0, 0, 0, 0, 0);
+        let mut empty = 0;
+        for v in 0..HEIGHT {
+            for u in 0..WIDTH {
+                let [r, g, b] = pixels[(v * WIDTH + u) as usize];
+                let red = i32::from(r) > i32::from(g) + 60 && g == b;
+                let blue = i32::from(b) > i32::from(r) + 60 && r == g;
+                match ray_cast(u, v, 20.0) {
+                    Some((Surface::Ground, _)) => {
+                        ground += 1;
+                        ground_red += usize::from(red);
+                    }
+                    Some((Surface::Ramp, _)) => {
+                        ramp += 1;
+                        ramp_blue += usize::from(blue);
+                    }
+                    None => {
+                        empty += 1;
+                        empty_black += usize::from([r, g, b] == [0, 0, 0]);
+                    }
+                }
+            }
+        }
+        assert!(ground > 10_000 && ramp > 10_000, "{ground} {ramp}");
+        assert!(ground_red as f64 > 0.99 * ground as f64, "{ground_red}/{ground}");
+        assert!(ramp_blue as f64 > 0.99 * ramp as f64, "{ramp_blue}/{ramp}");
+        assert_eq!(empty_black, empty);
+    }
+}
+
+#[test]
+fn render_frame_picks_the_frame_and_an_unknown_one_fails() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = write_recording(&dir.path().join("ramp"), &[20.0; 3], Truth::Recording(20.0));
+    let out_dir = dir.path().join("pictures");
+    let pictures = path_str(&out_dir);
+    let out = eval(&[path_str(&rec), "--method", "tls", "--render", pictures, "--render-frame", "2"]);
+    assert!(out.success, "{}", out.stderr);
+    assert!(out_dir.join("ramp-tls-frame000002.png").is_file());
+    let out = eval(&[path_str(&rec), "--method", "tls", "--render", pictures, "--render-frame", "7"]);
+    assert!(!out.success);
+    assert!(out.stderr.contains("frame 7"), "{}", out.stderr);
+    assert!(out.stderr.contains(path_str(&rec)), "{}", out.stderr);
+}
+
+#[test]
+fn bad_arguments_are_refused() {
+    let out = eval(&["somewhere", "--method", "magic"]);
+    assert!(!out.success);
+    assert!(out.stderr.contains("tls or all"), "{}", out.stderr);
+    let out = eval(&[]);
+    assert!(!out.success);
+    assert!(out.stderr.contains("RECORDING"), "{}", out.stderr);
+    let out = eval(&["--help"]);
+    assert!(out.success);
+    assert!(out.stdout.contains("Examples:") && out.stdout.contains("|slope_deg|"));
+}
