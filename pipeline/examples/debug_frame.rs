@@ -25,7 +25,10 @@ fn main() {
     let rec = common::Recording::open(std::path::Path::new(&dir)).expect("recording");
     let frame = rec.frame(k).expect("frame");
     let view = frame.view();
-    let config = EstimatorConfig::default();
+    let config = match std::env::var("CONFIG") {
+        Ok(text) => EstimatorConfig::from_toml_str(&text).expect("CONFIG"),
+        Err(_) => EstimatorConfig::default(),
+    };
     let mut keep = Vec::new();
     let stats = StatisticalOutlierFilter::new().filter(&view, &config.outlier, &mut keep);
     println!("outlier: {stats:?}");

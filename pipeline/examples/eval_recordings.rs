@@ -20,10 +20,11 @@ fn main() {
         Err(_) => SlopeMethod::ALL.to_vec(),
     };
     for method in methods {
-        let mut est = Estimator::new(EstimatorConfig {
-            method,
-            ..EstimatorConfig::default()
-        });
+        let base = match std::env::var("CONFIG") {
+            Ok(text) => EstimatorConfig::from_toml_str(&text).expect("CONFIG"),
+            Err(_) => EstimatorConfig::default(),
+        };
+        let mut est = Estimator::new(EstimatorConfig { method, ..base });
         for dir in &dirs {
             let rec = match common::Recording::open(Path::new(dir)) {
                 Ok(r) => r,

@@ -114,8 +114,12 @@ impl Default for OutlierConfig {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct RansacConfig {
-    /// A point within this distance of a plane is an inlier, metres.
+    /// A point within this distance of a plane is an inlier, metres...
     pub distance_threshold_m: f64,
+    /// ...or within this times its squared depth (metres per square metre),
+    /// whichever is larger: depth noise and quantisation grow with the
+    /// square of the depth (a Kinect v1 quantises 5 m to 7 cm terraces).
+    pub distance_threshold_per_m2: f64,
     /// Hypotheses drawn per plane at most (fewer when `confidence` is reached).
     pub max_iterations: usize,
     /// Probability of drawing at least one all-inlier sample, which sets the
@@ -140,6 +144,7 @@ impl Default for RansacConfig {
     fn default() -> Self {
         Self {
             distance_threshold_m: 0.02,
+            distance_threshold_per_m2: 0.003,
             max_iterations: 500,
             confidence: 0.999,
             sample_stride_px: 4,
@@ -177,6 +182,11 @@ pub struct NormalsConfig {
     /// (`C^-1 r`) instead of isotropic noise (the smallest eigenvector, as
     /// the paper); see `normals.rs`.
     pub ray_noise_correction: bool,
+    /// Keep only the normals of interior points, whose smallest window
+    /// holds K of the plane's points (border points see one side of their
+    /// neighbourhood, and on real surfaces the mixed pixels and multipath of
+    /// the edge); all normals when fewer than K or a tenth are interior.
+    pub interior_only: bool,
 }
 
 impl Default for NormalsConfig {
@@ -185,6 +195,7 @@ impl Default for NormalsConfig {
             neighbours: 100,
             max_window_radius_px: 12,
             ray_noise_correction: true,
+            interior_only: true,
         }
     }
 }
@@ -329,6 +340,15 @@ impl EstimatorConfig {
             "ransac.distance_threshold_m",
             self.ransac.distance_threshold_m,
         )?;
+        if !(self.ransac.distance_threshold_per_m2.is_finite()
+            && self.ransac.distance_threshold_per_m2 >= 0.0)
+        {
+            return Err(invalid(
+                "ransac.distance_threshold_per_m2",
+                self.ransac.distance_threshold_per_m2,
+                "must be a finite number >= 0",
+            ));
+        }
         at_least("ransac.max_iterations", self.ransac.max_iterations, 1)?;
         if !(self.ransac.confidence > 0.0 && self.ransac.confidence < 1.0) {
             return Err(invalid(

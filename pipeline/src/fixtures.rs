@@ -35,6 +35,18 @@ pub struct Scene {
 
 const BIG: f64 = 1e6;
 
+/// Pass as `sigma_1m` for the Kinect v2 axial noise of Fankhauser et al.
+/// (2015): `1.5 - 0.5 z + 0.3 z^2 + 0.1 z^1.5 t^2 / (pi/2 - t)^2` mm at depth
+/// z and incidence t.
+pub const KINECT2_NOISE: f64 = -1.0;
+
+/// The Kinect v2 axial noise, metres.
+pub fn kinect2_sigma_m(z: f64, incidence_rad: f64) -> f64 {
+    let t = incidence_rad.clamp(0.0, 89f64.to_radians());
+    let g = t * t / (std::f64::consts::FRAC_PI_2 - t).powi(2);
+    (1.5 - 0.5 * z + 0.3 * z * z + 0.1 * z.powf(1.5) * g) * 1e-3
+}
+
 impl Scene {
     /// Flat ground up to 2 m ahead, then a ramp of `slope_deg` (negative:
     /// downhill; 90: a wall) seen from 0.5 m up, pitched 20 degrees down.
@@ -172,8 +184,9 @@ pub struct SceneCloud {
 
 impl SceneCloud {
     /// Renders `scene` at `width x height` with the Kinect v2 field of view
-    /// (fx = fy = 365 at 512 px wide), depth noise `sigma_1m * z^2` and depth
-    /// rounded to millimetres like a recording.
+    /// (fx = fy = 365 at 512 px wide), depth noise `sigma_1m * z^2` (or the
+    /// Kinect v2 model for [`KINECT2_NOISE`]) and depth rounded to
+    /// millimetres like a recording.
     pub fn render(scene: &Scene, width: usize, height: usize, sigma_1m: f64, seed: u64) -> Self {
         let f = 365.0 * width as f64 / 512.0;
         let mut cloud = Self::render_with_intrinsics(scene, width, height, f, sigma_1m, seed);
@@ -190,9 +203,10 @@ impl SceneCloud {
     }
 
     /// Full-size Kinect v2 frame (512 x 424, fx = fy = 365, cx = 255.5,
-    /// cy = 211.5) with 1.5 mm depth noise at 1 m.
+    /// cy = 211.5) with the Kinect v2 axial noise model (a negative
+    /// `sigma_1m` selects it) and millimetre depth.
     pub fn kinect2(scene: &Scene, seed: u64) -> Self {
-        Self::render(scene, 512, 424, 0.0015, seed)
+        Self::render(scene, 512, 424, KINECT2_NOISE, seed)
     }
 
     /// Renders with focal length `f` and the principal point at the centre,
@@ -219,15 +233,18 @@ impl SceneCloud {
                 let a = (u as f64 - intrinsics.cx) / f;
                 let b = (v as f64 - intrinsics.cy) / f;
                 let dir = xa * a + ya * b + za;
-                let t = scene
+                let hit = scene
                     .surfaces
                     .iter()
-                    .filter_map(|s| scene.hit(s, &dir))
-                    .min_by(f64::total_cmp);
-                let point = match t {
-                    Some(z) if z < 8.0 => {
+                    .filter_map(|s| scene.hit(s, &dir).map(|t| (t, s)))
+                    .min_by(|a, b| a.0.total_cmp(&b.0));
+                let point = match hit {
+                    Some((z, surface)) if z < 8.0 => {
                         let noise = if sigma_1m > 0.0 {
                             gaussian(&mut rng) * sigma_1m * z * z
+                        } else if sigma_1m < 0.0 {
+                            let cos_t = surface.normal.dot(&dir).abs() / dir.norm();
+                            gaussian(&mut rng) * kinect2_sigma_m(z, cos_t.clamp(0.0, 1.0).acos())
                         } else {
                             0.0
                         };

@@ -54,7 +54,13 @@ pub struct PlaneSegmenter {
     /// Free sample points: coordinates and coarse normal (NaN if unknown).
     sample_xyz: Vec<Vector3<f64>>,
     sample_normal: Vec<Vector3<f64>>,
+    sample_pixel: Vec<u32>,
     sample_with_normal: Vec<u32>,
+    /// Per pixel: FREE, TAKEN (in an extracted plane), or a candidate
+    /// region's label during [`Self::keep_largest_region`].
+    region: Vec<u32>,
+    stack: Vec<u32>,
+    region_sizes: Vec<usize>,
     score_subset: Vec<u32>,
     inlier_flags: Vec<bool>,
     planes: Vec<SegmentedPlane>,
@@ -62,6 +68,11 @@ pub struct PlaneSegmenter {
 }
 
 const NO_PLANE: u16 = u16::MAX;
+const FREE: u32 = u32::MAX;
+const TAKEN: u32 = u32::MAX - 1;
+const CANDIDATE: u32 = u32::MAX - 2;
+/// Hypotheses whose largest region is too small before segmentation stops.
+const MAX_FAILURES: usize = 8;
 
 impl PlaneSegmenter {
     pub fn new() -> Self {
@@ -83,7 +94,7 @@ impl PlaneSegmenter {
     ) -> &[SegmentedPlane] {
         self.planes.clear();
         let (w, h) = (cloud.width, cloud.height);
-        if cloud.points.len() != w * h || keep.len() != w * h {
+        if cloud.points.len() != w * h || keep.len() != w * h || w * h >= CANDIDATE as usize {
             return &self.planes;
         }
         self.free_index.clear();
@@ -96,7 +107,13 @@ impl PlaneSegmenter {
         }
         let total = self.free_index.len();
         self.load_sample(cloud, keep, config);
-        let t = config.distance_threshold_m;
+        self.region.clear();
+        self.region.resize(w * h, FREE);
+        let mut failures = 0;
+        let t = Threshold {
+            base_m: config.distance_threshold_m,
+            per_m2: config.distance_threshold_per_m2,
+        };
         let cos_gate = if config.normal_threshold_deg > 0.0 && config.normal_threshold_deg < 90.0 {
             Some(config.normal_threshold_deg.to_radians().cos())
         } else {
@@ -124,21 +141,58 @@ impl PlaneSegmenter {
                     None => break,
                 }
             }
-            // Inliers from every free point.
+            // Inliers from every free point, then only the largest
+            // 8-connected region of them on the pixel grid.
+            self.inlier_flags.clear();
+            for q in &self.free_xyz {
+                let p = Vector3::new(f64::from(q[0]), f64::from(q[1]), f64::from(q[2]));
+                self.inlier_flags
+                    .push(plane.signed_distance(&p).abs() <= t.at(&p));
+            }
+            self.keep_largest_region(w, h);
             let mut inliers = Vec::new();
             let mut moments = Moments::new();
-            self.inlier_flags.clear();
-            for (&i, q) in self.free_index.iter().zip(&self.free_xyz) {
-                let p = Vector3::new(f64::from(q[0]), f64::from(q[1]), f64::from(q[2]));
-                let inside = plane.signed_distance(&p).abs() <= t;
-                self.inlier_flags.push(inside);
+            for ((&i, q), &inside) in self
+                .free_index
+                .iter()
+                .zip(&self.free_xyz)
+                .zip(&self.inlier_flags)
+            {
                 if inside {
                     inliers.push(i);
-                    moments.add(&p);
+                    moments.add(&Vector3::new(
+                        f64::from(q[0]),
+                        f64::from(q[1]),
+                        f64::from(q[2]),
+                    ));
                 }
             }
             if inliers.len() < config.min_plane_points {
-                break;
+                // Too small (or only scattered pieces): these sample points
+                // cannot seed a plane; drop them and try again a few times.
+                failures += 1;
+                if failures > MAX_FAILURES {
+                    break;
+                }
+                let mut k = 0;
+                for j in 0..self.sample_xyz.len() {
+                    if !is_inlier(
+                        &plane,
+                        &self.sample_xyz[j],
+                        &self.sample_normal[j],
+                        t,
+                        cos_gate,
+                    ) {
+                        self.sample_xyz[k] = self.sample_xyz[j];
+                        self.sample_normal[k] = self.sample_normal[j];
+                        self.sample_pixel[k] = self.sample_pixel[j];
+                        k += 1;
+                    }
+                }
+                self.sample_xyz.truncate(k);
+                self.sample_normal.truncate(k);
+                self.sample_pixel.truncate(k);
+                continue;
             }
             let Some(fitted) = fit_tls(&moments) else {
                 break;
@@ -156,16 +210,21 @@ impl PlaneSegmenter {
             }
             self.free_index.truncate(k);
             self.free_xyz.truncate(k);
+            for &i in &inliers {
+                self.region[i as usize] = TAKEN;
+            }
             let mut k = 0;
             for j in 0..self.sample_xyz.len() {
-                if plane.signed_distance(&self.sample_xyz[j]).abs() > t {
+                if self.region[self.sample_pixel[j] as usize] != TAKEN {
                     self.sample_xyz[k] = self.sample_xyz[j];
                     self.sample_normal[k] = self.sample_normal[j];
+                    self.sample_pixel[k] = self.sample_pixel[j];
                     k += 1;
                 }
             }
             self.sample_xyz.truncate(k);
             self.sample_normal.truncate(k);
+            self.sample_pixel.truncate(k);
             tracing::trace!(
                 plane = self.planes.len(),
                 inliers = inliers.len(),
@@ -182,10 +241,62 @@ impl PlaneSegmenter {
         &self.planes
     }
 
+    /// Keeps in `inlier_flags` only the largest 8-connected pixel region of
+    /// the flagged free points.
+    fn keep_largest_region(&mut self, w: usize, h: usize) {
+        for (&i, &inside) in self.free_index.iter().zip(&self.inlier_flags) {
+            if inside {
+                self.region[i as usize] = CANDIDATE;
+            }
+        }
+        self.region_sizes.clear();
+        for (&seed, &inside) in self.free_index.iter().zip(&self.inlier_flags) {
+            if !inside || self.region[seed as usize] != CANDIDATE {
+                continue;
+            }
+            let label = self.region_sizes.len() as u32;
+            let mut size = 0;
+            self.region[seed as usize] = label;
+            self.stack.clear();
+            self.stack.push(seed);
+            while let Some(p) = self.stack.pop() {
+                size += 1;
+                let (u, v) = ((p as usize) % w, (p as usize) / w);
+                for dv in -1isize..=1 {
+                    for du in -1isize..=1 {
+                        let (uu, vv) = (u as isize + du, v as isize + dv);
+                        if uu < 0 || vv < 0 || uu >= w as isize || vv >= h as isize {
+                            continue;
+                        }
+                        let q = vv as usize * w + uu as usize;
+                        if self.region[q] == CANDIDATE {
+                            self.region[q] = label;
+                            self.stack.push(q as u32);
+                        }
+                    }
+                }
+            }
+            self.region_sizes.push(size);
+        }
+        let largest = self
+            .region_sizes
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(&a.0)))
+            .map(|(l, _)| l as u32);
+        for (&i, inside) in self.free_index.iter().zip(self.inlier_flags.iter_mut()) {
+            if *inside {
+                *inside = Some(self.region[i as usize]) == largest;
+                self.region[i as usize] = FREE;
+            }
+        }
+    }
+
     /// The sample grid and its coarse normals.
     fn load_sample(&mut self, cloud: &CloudView<'_>, keep: &[bool], config: &RansacConfig) {
         self.sample_xyz.clear();
         self.sample_normal.clear();
+        self.sample_pixel.clear();
         let s = config.sample_stride_px.max(1);
         let (w, h) = (cloud.width, cloud.height);
         let radius = 2;
@@ -204,6 +315,7 @@ impl PlaneSegmenter {
                 };
                 self.sample_xyz.push(to_vec3(&cloud.points[i]));
                 self.sample_normal.push(n);
+                self.sample_pixel.push(i as u32);
             }
         }
     }
@@ -235,7 +347,10 @@ impl PlaneSegmenter {
                 self.score_subset.push(rng.random_range(0..n) as u32);
             }
         }
-        let t = config.distance_threshold_m;
+        let t = Threshold {
+            base_m: config.distance_threshold_m,
+            per_m2: config.distance_threshold_per_m2,
+        };
         let mut best: Option<(usize, Plane)> = None;
         let mut needed = config.max_iterations;
         let mut it = 0;
@@ -298,7 +413,7 @@ impl PlaneSegmenter {
     }
 
     /// Gives a point within the threshold of several planes to the nearest.
-    fn assign_to_nearest(&mut self, cloud: &CloudView<'_>, t: f64) {
+    fn assign_to_nearest(&mut self, cloud: &CloudView<'_>, t: Threshold) {
         if self.planes.len() < 2 {
             return;
         }
@@ -320,7 +435,7 @@ impl PlaneSegmenter {
                         continue;
                     }
                     let d = other.plane.signed_distance(&p).abs();
-                    if d < best.0 && d <= t {
+                    if d < best.0 && d <= t.at(&p) {
                         best = (d, j);
                     }
                 }
@@ -355,15 +470,29 @@ impl PlaneSegmenter {
     }
 }
 
+/// The inlier distance at a point: `max(base, per_m2 * z^2)`.
+#[derive(Debug, Clone, Copy)]
+struct Threshold {
+    base_m: f64,
+    per_m2: f64,
+}
+
+impl Threshold {
+    #[inline]
+    fn at(&self, p: &Vector3<f64>) -> f64 {
+        self.base_m.max(self.per_m2 * p.z * p.z)
+    }
+}
+
 #[inline]
 fn is_inlier(
     plane: &Plane,
     p: &Vector3<f64>,
     n: &Vector3<f64>,
-    t: f64,
+    t: Threshold,
     cos_gate: Option<f64>,
 ) -> bool {
-    if plane.signed_distance(p).abs() > t {
+    if plane.signed_distance(p).abs() > t.at(p) {
         return false;
     }
     match cos_gate {

@@ -66,9 +66,17 @@ pub enum SourceError {
         #[source]
         source: RecordingError,
     },
-    /// A source-specific failure (the Kinect layer's errors).
-    #[error("{0}")]
-    Device(String),
+    /// The Kinect v2 failed in a way the source cannot recover from.
+    #[cfg(feature = "kinect2")]
+    #[error(transparent)]
+    Kinect2(Box<crate::kinect2::Kinect2Error>),
+}
+
+#[cfg(feature = "kinect2")]
+impl From<crate::kinect2::Kinect2Error> for SourceError {
+    fn from(err: crate::kinect2::Kinect2Error) -> Self {
+        Self::Kinect2(Box::new(err))
+    }
 }
 
 /// A stream of depth frames.

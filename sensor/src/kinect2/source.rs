@@ -394,7 +394,7 @@ impl FrameSource for Kinect2Source {
                     }
                 }
                 Err(err @ Kinect2Error::UnexpectedFrame { .. }) => {
-                    return Err(SourceError::Device(err.to_string()))
+                    return Err(err.into())
                 }
                 Err(err) => {
                     // A failing wait or registration: treat like a lost device.

@@ -26,7 +26,7 @@ use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
 use slope_ipc_types::{CloudPoint, EstimateStatus, Mount, SlopeMethod, DEFAULT_SERVICE_PREFIX};
 use slope_pipeline::{CloudView, Estimate, Estimator, EstimatorConfig, StageTimings};
-use slope_sensor::recording::{DepthImage, Recording};
+use slope_sensor::recording::{DepthImage, FrameEntry, Recording};
 
 use crate::cli::CommonArgs;
 use crate::demo::median;
@@ -319,7 +319,12 @@ pub fn summarize(frames: &[FrameResult], truth_deg: Option<f64>) -> Summary {
     let not_ok = EstimateStatus::ALL
         .into_iter()
         .filter(|s| *s != EstimateStatus::Ok)
-        .map(|s| (s.name(), frames.iter().filter(|f| f.status == s.name()).count()))
+        .map(|s| {
+            (
+                s.name(),
+                frames.iter().filter(|f| f.status == s.name()).count(),
+            )
+        })
         .filter(|(_, count)| *count > 0)
         .collect();
 
@@ -422,10 +427,8 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<EvalOutcome> {
         .max()
         .unwrap_or(0)
         .max("recording".len());
-    if !args.json && !opened.is_empty() {
-        if !print_line(&bar, &table_header(label_width))? {
-            return Ok(outcome);
-        }
+    if !args.json && !opened.is_empty() && !print_line(&bar, &table_header(label_width))? {
+        return Ok(outcome);
     }
     let mut render_names = RenderNames::default();
 
@@ -438,8 +441,14 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<EvalOutcome> {
             (Some(_), Some(index)) => Some(index),
             (Some(_), None) => frames.get(frames.len() / 2).map(|f| f.index),
         };
-        let (reports, kept) =
-            evaluate_recording(recording, &label, frames, &mut estimators, render_index, &bar);
+        let (reports, kept) = evaluate_recording(
+            recording,
+            &label,
+            frames,
+            &mut estimators,
+            render_index,
+            &bar,
+        );
         for report in &reports {
             let text = if args.json {
                 serde_json::to_string(report).context("cannot format the report as JSON")?
@@ -462,7 +471,8 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<EvalOutcome> {
                 evaluated,
                 tolerance_m: args.render_tolerance_m,
             };
-            if let Err(err) = render(&target, kept, recording, &label) {
+            // Suspended: `render` logs each file it writes.
+            if let Err(err) = bar.suspend(|| render(&target, kept, recording, &label)) {
                 let message = format!("{err:#}");
                 bar.suspend(|| tracing::error!("{message}"));
                 outcome.failures.push(message);
@@ -492,7 +502,7 @@ fn print_line(bar: &ProgressBar, text: &str) -> anyhow::Result<bool> {
 fn evaluate_recording(
     recording: &Recording,
     label: &str,
-    frames: &[slope_sensor::recording::FrameEntry],
+    frames: &[FrameEntry],
     estimators: &mut [Estimator],
     render_index: Option<u64>,
     bar: &ProgressBar,
@@ -500,7 +510,8 @@ fn evaluate_recording(
     let projector = recording.projector();
     let mut depth = DepthImage::default();
     let mut points = vec![CloudPoint::INVALID; projector.len()];
-    let mut results: Vec<Vec<FrameResult>> = vec![Vec::with_capacity(frames.len()); estimators.len()];
+    let mut results: Vec<Vec<FrameResult>> =
+        vec![Vec::with_capacity(frames.len()); estimators.len()];
     let mut render = None;
     let meta = recording.meta();
     let (width, height) = (meta.depth.width as usize, meta.depth.height as usize);
@@ -786,10 +797,7 @@ mod tests {
             s.median_stage_ms.0,
             vec![("outlier".to_string(), 2.5), ("ransac".to_string(), 1.5)]
         );
-        assert_eq!(
-            s.not_ok.0,
-            vec![("no_inclined_plane", 1), ("bad_frame", 1)]
-        );
+        assert_eq!(s.not_ok.0, vec![("no_inclined_plane", 1), ("bad_frame", 1)]);
     }
 
     #[test]

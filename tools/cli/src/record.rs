@@ -508,7 +508,7 @@ fn record_kinect(
 fn record_kinect(_: &RecordArgs, _: &RecordLimits, _: &StopFlag) -> anyhow::Result<RecordStats> {
     anyhow::bail!(
         "this slope-record was built without the Kinect v2; rebuild with \
-         `cargo build --release --features kinect2` (see README \"Running on the robot\"), \
+         `cargo build --release -p slope-tools --features kinect2` (see README \"Running on the robot\"), \
          or record the cloud topic of a running slope-capture (--source topic)"
     )
 }
@@ -574,8 +574,14 @@ mod tests {
         cloud_to_images(&header, &points, 0.001, &mut depth, &mut color);
         assert_eq!(depth.data, original);
         let color = color.expect("colour");
-        for (i, rgb) in color.data.iter().enumerate() {
-            assert_eq!(*rgb, [1, 2, (i % 256) as u8]);
+        // A point without depth carries no colour.
+        for (i, (rgb, d)) in color.data.iter().zip(&original).enumerate() {
+            let expected = if *d == 0 {
+                [0, 0, 0]
+            } else {
+                [1, 2, (i % 256) as u8]
+            };
+            assert_eq!(*rgb, expected, "pixel {i}");
         }
     }
 

@@ -98,8 +98,7 @@ pub fn render_planes(
 
 /// Writes `image` as an 8-bit RGB PNG.
 pub fn write_png(path: &Path, image: &ColorImage) -> anyhow::Result<()> {
-    let file =
-        File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+    let file = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
     let mut encoder = png::Encoder::new(BufWriter::new(file), image.width, image.height);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
@@ -182,12 +181,24 @@ mod tests {
         let image = render_planes(&points, 3, 2, &overlay);
         assert_eq!((image.width, image.height), (3, 2));
         let [r, g, b] = image.data[0];
-        assert!(r > 200 && g == b && g < 100, "ground pixel {:?}", image.data[0]);
+        assert!(
+            r > 200 && g == b && g < 100,
+            "ground pixel {:?}",
+            image.data[0]
+        );
         let [r, g, b] = image.data[1];
-        assert!(b > 150 && r == g && r < 50, "wall pixel {:?}", image.data[1]);
+        assert!(
+            b > 150 && r == g && r < 50,
+            "wall pixel {:?}",
+            image.data[1]
+        );
         assert_eq!(image.data[3], [0, 0, 0]);
         let [r, g, b] = image.data[4];
-        assert!(b > 150 && r == g && r < 50, "pixel near both {:?}", image.data[4]);
+        assert!(
+            b > 150 && r == g && r < 50,
+            "pixel near both {:?}",
+            image.data[4]
+        );
         // Grey: the nearest untinted pixel is NEAR_GREY, a middle one between.
         assert_eq!(image.data[5], [NEAR_GREY; 3]);
         let mid = image.data[2][0];

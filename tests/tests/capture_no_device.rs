@@ -1,0 +1,55 @@
+//! `slope-capture` with libfreenect2 installed but no Kinect v2 attached
+//! (the situation on CI machines and on a robot whose camera is unplugged).
+//! Needs the `kinect2` feature: `cargo test --workspace --features kinect2`.
+#![cfg(feature = "kinect2")]
+
+use std::time::{Duration, Instant};
+
+use nix::sys::signal::Signal;
+use slope_integration_tests::{deadline, unique_prefix, Proc};
+
+#[test]
+fn no_kinect_is_a_clear_error_and_a_nonzero_exit_within_seconds() {
+    let prefix = unique_prefix("capture-none");
+    let started = Instant::now();
+    let mut capture = Proc::spawn("slope-capture", ["--service-prefix", &prefix]);
+    let status = capture
+        .wait_exit(deadline(10.0))
+        .expect("slope-capture exits without a device");
+    let elapsed = started.elapsed();
+    let stderr = capture.stderr_lines().join("\n");
+    assert!(!status.success(), "exited 0 without a Kinect:\n{stderr}");
+    assert!(
+        elapsed < Duration::from_secs(5),
+        "took {elapsed:?} to give up"
+    );
+    assert!(
+        stderr.contains("no Kinect v2 found"),
+        "unclear message:\n{stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+#[test]
+fn wait_for_device_retries_until_sigterm_then_exits_zero() {
+    let prefix = unique_prefix("capture-wait");
+    let mut capture = Proc::spawn(
+        "slope-capture",
+        ["--service-prefix", &prefix, "--wait-for-device"],
+    );
+    // Two attempts prove it keeps retrying rather than giving up.
+    let retrying = capture.wait_stderr("no Kinect v2 found", deadline(10.0));
+    assert!(retrying.is_some(), "{}", capture.diagnostics());
+    let again = capture.wait_stderr("no Kinect v2 found", deadline(10.0));
+    assert!(again.is_some(), "did not retry:\n{}", capture.diagnostics());
+    assert!(
+        capture.wait_exit(deadline(0.2)).is_none(),
+        "exited while waiting for a device:\n{}",
+        capture.diagnostics()
+    );
+    capture.signal(Signal::SIGTERM);
+    let status = capture.wait_exit(deadline(1.0));
+    let diagnostics = capture.diagnostics();
+    let status = status.unwrap_or_else(|| panic!("still running 1 s after SIGTERM\n{diagnostics}"));
+    assert!(status.success(), "{status}\n{diagnostics}");
+}
