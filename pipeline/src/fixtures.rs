@@ -148,9 +148,19 @@ impl Scene {
         }
     }
 
+    /// Distance along the optical axis to the (unbounded) plane of `s`.
     fn axis_distance(&self, s: &Surface) -> f64 {
         let [_, _, z] = self.camera_axes();
-        self.hit(s, &z).unwrap_or(f64::NAN)
+        let denom = s.normal.dot(&z);
+        if denom.abs() < 1e-12 {
+            return f64::NAN;
+        }
+        let t = s.normal.dot(&(s.point - self.camera_centre())) / denom;
+        if t > 0.0 {
+            t
+        } else {
+            f64::NAN
+        }
     }
 
     /// Ray parameter of the hit of `dir` (camera z component 1) on `s`.

@@ -515,18 +515,35 @@ mod tests {
         let cloud = SceneCloud::render_with_intrinsics(&scene, 80, 60, 70.0, 0.0, 1);
         let members = all_measured(&cloud);
         let mut est = NormalEstimator::new();
-        let (normals, stats) = est.estimate(
-            &cloud.view(),
-            &members,
-            &NormalsConfig::default(),
-            &Vector3::zeros(),
-        );
+        let all = NormalsConfig {
+            interior_only: false,
+            ..NormalsConfig::default()
+        };
+        let (normals, stats) = est.estimate(&cloud.view(), &members, &all, &Vector3::zeros());
         assert_eq!(stats.undefined, 0);
         assert_eq!(stats.from_window, members.len());
         for n in normals {
             // The wall faces the camera: normal (0, 0, -1) in camera coordinates.
             assert!((n.z + 1.0).abs() < 1e-9, "{n:?}");
         }
+        // Interior only: a pixel whose 11x11 window, cut by the image
+        // border, holds fewer than K = 100 pixels is dropped.
+        let (normals, stats) = est.estimate(
+            &cloud.view(),
+            &members,
+            &NormalsConfig::default(),
+            &Vector3::zeros(),
+        );
+        let span = |c: usize, len: usize| (c + 6).min(len) - c.saturating_sub(5);
+        let mut border = 0;
+        for (slot, n) in normals.iter().enumerate() {
+            let (u, v) = (slot % 80, slot / 80);
+            let inside = span(u, 80) * span(v, 60) >= 100;
+            border += usize::from(!inside);
+            assert_eq!(n.x.is_finite(), inside, "({u},{v})");
+        }
+        assert!(border > 0);
+        assert_eq!(stats.border, border);
     }
 
     #[test]
@@ -547,12 +564,11 @@ mod tests {
             .collect();
         assert!(members.len() > 2000, "{}", members.len());
         let mut est = NormalEstimator::new();
-        let (normals, _) = est.estimate(
-            &view,
-            &members,
-            &NormalsConfig::default(),
-            &Vector3::zeros(),
-        );
+        let cfg = NormalsConfig {
+            interior_only: false,
+            ..NormalsConfig::default()
+        };
+        let (normals, _) = est.estimate(&view, &members, &cfg, &Vector3::zeros());
         let normals = normals.to_vec();
         // Brute force: K nearest by linear scan, nalgebra eigen-decomposition.
         let pts: Vec<Vector3<f64>> = members
