@@ -12,7 +12,7 @@ use rand_chacha::ChaCha8Rng;
 use slope_pipeline::cloud::angle_between_deg;
 use slope_pipeline::cosine_kmeans::CosineKmeans;
 use slope_pipeline::normals::NormalEstimator;
-use slope_pipeline::pass_through::PassThrough;
+use slope_pipeline::pass_through::{Band, PassThrough};
 use slope_pipeline::plane_selection::{select_planes, GroundSource, PlaneSummary};
 use slope_pipeline::ransac_planes::PlaneSegmenter;
 use slope_pipeline::statistical_outlier::StatisticalOutlierFilter;
@@ -68,8 +68,16 @@ fn main() {
     }
     // Label image: depth in grey, planes in colour.
     let palette: [[u8; 3]; 10] = [
-        [230, 25, 75], [60, 180, 75], [255, 225, 25], [0, 130, 200], [245, 130, 48],
-        [145, 30, 180], [70, 240, 240], [240, 50, 230], [210, 245, 60], [250, 190, 212],
+        [230, 25, 75],
+        [60, 180, 75],
+        [255, 225, 25],
+        [0, 130, 200],
+        [245, 130, 48],
+        [145, 30, 180],
+        [70, 240, 240],
+        [240, 50, 230],
+        [210, 245, 60],
+        [250, 190, 212],
     ];
     let mut rgb = vec![0u8; w * view.height * 3];
     for (i, p) in view.points.iter().enumerate() {
@@ -84,27 +92,34 @@ fn main() {
             rgb[3 * i..3 * i + 3].copy_from_slice(&palette[k % 10]);
         }
     }
-    let out = format!("/tmp/labels_{}.png", std::path::Path::new(&dir).file_name().unwrap().to_string_lossy());
+    let name = std::path::Path::new(&dir)
+        .file_name()
+        .map_or_else(|| "frame".into(), |n| n.to_string_lossy().into_owned());
+    let out = std::env::temp_dir().join(format!("labels_{name}.png"));
     let file = std::fs::File::create(&out).expect("png");
     let mut enc = png::Encoder::new(std::io::BufWriter::new(file), w as u32, view.height as u32);
     enc.set_color(png::ColorType::Rgb);
     enc.set_depth(png::BitDepth::Eight);
-    enc.write_header().expect("png").write_image_data(&rgb).expect("png");
-    println!("labels in {out} (plane k = palette k: red, green, yellow, blue, orange, purple, cyan, magenta, lime, pink)");
+    enc.write_header()
+        .expect("png")
+        .write_image_data(&rgb)
+        .expect("png");
+    println!("labels in {} (plane k = palette k: red, green, yellow, blue, orange, purple, cyan, magenta, lime, pink)", out.display());
     let sel = select_planes(&summaries, up, &config.selection);
     println!("selection: {sel:?}");
     let Ok(sel) = sel else { return };
-    let mut chosen = vec![("inclined", sel.inclined)];
+    let mut chosen = vec![("inclined", sel.inclined, Band::Middle)];
     if let GroundSource::Plane(g) = sel.ground {
-        chosen.push(("ground", g));
+        chosen.push(("ground", g, Band::Lower));
     }
     let mut means = Vec::new();
-    for (name, idx) in chosen {
+    for (name, idx, band) in chosen {
         let mut pt = PassThrough::new();
         let (members, range) = pt.filter(
             view.points,
             &planes[idx].inliers,
             config.pass_through.max_points,
+            band,
         );
         let members = members.to_vec();
         let mut ne = NormalEstimator::new();

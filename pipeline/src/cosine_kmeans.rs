@@ -108,7 +108,7 @@ impl CosineKmeans {
         let mut counts = vec![0usize; k];
         for _ in 0..max_iterations.max(1) {
             iterations += 1;
-            let mut changed = false;
+            let mut changed = 0usize;
             for (label, u) in self.labels.iter_mut().zip(&self.unit) {
                 let best = centres
                     .iter()
@@ -118,7 +118,7 @@ impl CosineKmeans {
                     .map_or(0, |(j, _)| j);
                 if *label != best {
                     *label = best;
-                    changed = true;
+                    changed += 1;
                 }
             }
             self.sums.clear();
@@ -133,7 +133,8 @@ impl CosineKmeans {
                     *c = m;
                 }
             }
-            if !changed {
+            // Converged: fewer than one in a thousand labels moved.
+            if changed * 1000 <= n {
                 break;
             }
         }

@@ -18,7 +18,7 @@ use crate::config::EstimatorConfig;
 use crate::cosine_kmeans::CosineKmeans;
 use crate::cumulative_angle::cumulative_angle;
 use crate::normals::NormalEstimator;
-use crate::pass_through::PassThrough;
+use crate::pass_through::{Band, PassThrough};
 use crate::plane_fit::{fit_least_squares, fit_tls, Moments, Plane};
 use crate::plane_selection::{
     axis_distance, select_planes, slope_sign, GroundSource, PlaneSummary,
@@ -247,6 +247,7 @@ impl Estimator {
                 let Some(incl) = paper_plane_normals(
                     cloud,
                     &inclined_seg.inliers,
+                    Band::Middle,
                     cfg,
                     &mut self.pass_through,
                     &mut self.normals,
@@ -261,6 +262,7 @@ impl Estimator {
                         let Some(n) = paper_plane_normals(
                             cloud,
                             &g.inliers,
+                            Band::Lower,
                             cfg,
                             &mut self.pass_through,
                             &mut self.normals,
@@ -358,6 +360,7 @@ impl Estimator {
 fn paper_plane_normals(
     cloud: &CloudView<'_>,
     inliers: &[u32],
+    band: Band,
     config: &EstimatorConfig,
     pass_through: &mut PassThrough,
     normals: &mut NormalEstimator,
@@ -366,7 +369,8 @@ fn paper_plane_normals(
     clock: &mut Stopwatch,
 ) -> Option<Vector3<f64>> {
     out.clear();
-    let (members, _) = pass_through.filter(cloud.points, inliers, config.pass_through.max_points);
+    let (members, _) =
+        pass_through.filter(cloud.points, inliers, config.pass_through.max_points, band);
     clock.lap("pass_through");
     let (found, _) = normals.estimate(cloud, members, &config.normals, &Vector3::zeros());
     clock.lap("normals");
@@ -384,3 +388,9 @@ fn paper_plane_normals(
     clock.lap("kmeans");
     result
 }
+
+// The estimator daemon moves the estimator into its worker thread.
+const _: fn() = || {
+    fn assert_send<T: Send>() {}
+    assert_send::<Estimator>();
+};

@@ -126,7 +126,14 @@ impl NormalEstimator {
             let (u, v) = (pixel % w - bounds.u0, pixel / w - bounds.v0);
             let mut found = None;
             self.radius[slot] = u16::MAX;
-            for r in r0..=r_max {
+            // The patch spans at least `min_patch_radius_m` on the surface.
+            let metric = (config.min_patch_radius_m * focal / f64::from(p.z_m).max(1e-3)).ceil();
+            let r_start = if metric.is_finite() {
+                (metric as usize).clamp(r0, r_max.max(r0))
+            } else {
+                r0
+            };
+            for r in r_start..=r_max {
                 let (a0, a1) = (u.saturating_sub(r), (u + r + 1).min(bounds.width));
                 let (b0, b1) = (v.saturating_sub(r), (v + r + 1).min(bounds.height));
                 let t = &self.table;
@@ -141,7 +148,8 @@ impl NormalEstimator {
                         *mc = s(c);
                     }
                     found = Some(m);
-                    self.radius[slot] = r as u16;
+                    // 0: the first window sufficed (an interior point).
+                    self.radius[slot] = (r - r_start) as u16;
                     break;
                 }
                 if a0 == 0 && b0 == 0 && a1 == bounds.width && b1 == bounds.height {
@@ -168,10 +176,10 @@ impl NormalEstimator {
                 self.tree_normals(cloud, members, k, viewpoint, config.ray_noise_correction);
         }
         if config.interior_only {
-            let interior = self.radius.iter().filter(|&&r| r as usize == r0).count();
+            let interior = self.radius.iter().filter(|&&r| r == 0).count();
             if interior >= k.max(members.len() / 10) {
                 for (n, &r) in self.normals.iter_mut().zip(&self.radius) {
-                    if r as usize != r0 && n.x.is_finite() {
+                    if r != 0 && n.x.is_finite() {
                         *n = nan;
                         stats.border += 1;
                     }

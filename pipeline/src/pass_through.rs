@@ -15,10 +15,13 @@
 //!   the surface they describe (1 degree on a wall band on `slope-synth`
 //!   recordings). The ray's direction `y / z` carries no depth noise, so the
 //!   cut selects pixels, not noise.
-//! - *Why the middle?* A plane's first and last rows are where it meets other
+//! - *Which band?* A plane's first and last rows are where it meets other
 //!   planes (a ramp's foot, where multipath and mixed pixels bend the
-//!   measured surface) or ends in clutter; the middle band is the plane
-//!   itself. A contiguous band also keeps every point's neighbourhood intact
+//!   measured surface) or ends in clutter, so the inclined plane keeps its
+//!   middle band. The ground keeps its bottom band (`Band::Lower`): the
+//!   floor right in front of the robot, as far as it gets from the junction
+//!   with the plane ahead (on the real stair frame the band at the riser's
+//!   foot is bent by several degrees) and measured at the shortest range. A contiguous band also keeps every point's neighbourhood intact
 //!   for the normal estimation (a random or strided subsample would thin it).
 //!
 //! The cut is two O(n) selections, not a sort.
@@ -36,6 +39,17 @@ pub struct PassThroughRange {
     pub cut: bool,
 }
 
+/// Which band of rows a cut plane keeps.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Band {
+    /// Centred on the median elevation (the inclined plane).
+    Middle,
+    /// Centred on the elevation with three quarters of the points above it
+    /// (the ground: nearer the robot and away from the junction with the
+    /// plane ahead, without reaching the image's bottom edge).
+    Lower,
+}
+
 /// Reusable buffers of the filter.
 #[derive(Debug, Default, Clone)]
 pub struct PassThrough {
@@ -49,14 +63,15 @@ impl PassThrough {
     }
 
     /// Keeps at most `max_points` of `members` (pixel indices into `points`):
-    /// the band of ray elevations `y / z` centred on their median. Members
-    /// without a reading are dropped.
-    /// Returns the kept indices (in pixel order) and the range.
+    /// the band of ray elevations `y / z` at `band`. Members without a
+    /// reading are dropped. Returns the kept indices (in pixel order) and
+    /// the range.
     pub fn filter(
         &mut self,
         points: &[CloudPoint],
         members: &[u32],
         max_points: usize,
+        band: Band,
     ) -> (&[u32], PassThroughRange) {
         self.keyed.clear();
         for &i in members {
@@ -72,7 +87,10 @@ impl PassThrough {
             if max_points == 0 {
                 self.keyed.clear();
             } else {
-                let lo = (self.keyed.len() - max_points) / 2;
+                let lo = match band {
+                    Band::Middle => (self.keyed.len() - max_points) / 2,
+                    Band::Lower => (self.keyed.len() - max_points) * 3 / 4,
+                };
                 if lo > 0 {
                     self.keyed.select_nth_unstable_by(lo, by_depth);
                 }
@@ -126,7 +144,7 @@ mod tests {
         let pts = points_at_elevations(&depths);
         let members: Vec<u32> = (0..100).collect();
         let mut pt = PassThrough::new();
-        let (kept, range) = pt.filter(&pts, &members, 30);
+        let (kept, range) = pt.filter(&pts, &members, 30, Band::Middle);
         assert_eq!(kept.len(), 30);
         assert!(range.cut);
         // 100 points, 30 kept: ranks 35..65, elevations 0.35..0.64.
@@ -142,13 +160,19 @@ mod tests {
             p.z_m *= s;
         }
         let mut pt2 = PassThrough::new();
-        assert_eq!(pt2.filter(&noisy, &members, 30).0, kept);
+        assert_eq!(pt2.filter(&noisy, &members, 30, Band::Middle).0, kept);
         let mut sorted: Vec<(f32, u32)> =
             members.iter().map(|&i| (depths[i as usize], i)).collect();
         sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
         let mut want: Vec<u32> = sorted[35..65].iter().map(|x| x.1).collect();
         want.sort_unstable();
         assert_eq!(kept, &want[..]);
+        // The lower band: 70 points left out, 52 of them above.
+        let mut pt3 = PassThrough::new();
+        let (bottom, _) = pt3.filter(&pts, &members, 30, Band::Lower);
+        let mut want_bottom: Vec<u32> = sorted[52..82].iter().map(|x| x.1).collect();
+        want_bottom.sort_unstable();
+        assert_eq!(bottom, &want_bottom[..]);
     }
 
     #[test]
@@ -156,15 +180,15 @@ mod tests {
         let pts = points_at_elevations(&[2.0; 50]);
         let members: Vec<u32> = (0..50).collect();
         let mut pt = PassThrough::new();
-        let (kept, range) = pt.filter(&pts, &members, 50);
+        let (kept, range) = pt.filter(&pts, &members, 50, Band::Middle);
         assert_eq!(kept.len(), 50);
         assert!(!range.cut);
-        let (kept, range) = pt.filter(&pts, &members, 20);
+        let (kept, range) = pt.filter(&pts, &members, 20, Band::Lower);
         assert_eq!(kept.len(), 20);
         assert!(range.cut);
         let mut bad = pts.clone();
         bad[3] = CloudPoint::INVALID;
-        let (kept, _) = pt.filter(&bad, &[3, 4, 999], 10);
+        let (kept, _) = pt.filter(&bad, &[3, 4, 999], 10, Band::Middle);
         assert_eq!(kept, &[4]);
     }
 }

@@ -34,6 +34,9 @@ use crate::plane_fit::{fit_tls, Moments, Plane};
 /// subset); the winner is rescored on all of them.
 const SCORE_POINTS: usize = 2000;
 
+/// Points of the score subset a hypothesis is first tested on.
+const PRETEST: usize = 100;
+
 /// One segmented plane.
 #[derive(Debug, Clone)]
 pub struct SegmentedPlane {
@@ -379,20 +382,34 @@ impl PlaneSegmenter {
                     continue;
                 }
             }
-            let score = self
-                .score_subset
+            // Preemptive test: a hypothesis that scores under half the best
+            // rate on the first PRETEST points is not scored further.
+            let inlier = |k: &u32| {
+                let k = *k as usize;
+                is_inlier(
+                    &plane,
+                    &self.sample_xyz[k],
+                    &self.sample_normal[k],
+                    t,
+                    cos_gate,
+                )
+            };
+            let pre = PRETEST.min(self.score_subset.len());
+            let pre_score = self.score_subset[..pre]
                 .iter()
-                .filter(|&&k| {
-                    let k = k as usize;
-                    is_inlier(
-                        &plane,
-                        &self.sample_xyz[k],
-                        &self.sample_normal[k],
-                        t,
-                        cos_gate,
-                    )
-                })
+                .filter(|k| inlier(k))
                 .count();
+            if let Some((best_score, _)) = &best {
+                let expected = *best_score as f64 * pre as f64 / self.score_subset.len() as f64;
+                if (pre_score as f64) < 0.5 * expected {
+                    continue;
+                }
+            }
+            let score = pre_score
+                + self.score_subset[pre..]
+                    .iter()
+                    .filter(|k| inlier(k))
+                    .count();
             if best.as_ref().is_none_or(|(s, _)| score > *s) {
                 best = Some((score, plane));
                 let w = score as f64 / self.score_subset.len() as f64;

@@ -184,7 +184,7 @@ impl StatisticalOutlierFilter {
             let count = &mut self.count[base..base + w];
             for u in 0..w {
                 let d = value[u];
-                let valid = d == d;
+                let valid = !d.is_nan();
                 sum[u] += if valid { d } else { 0.0 };
                 count[u] += if valid { 1.0 } else { 0.0 };
             }
@@ -325,7 +325,7 @@ impl StatisticalOutlierFilter {
             let dy = cy[u] - oy[u];
             let dz = cz[u] - oz[u];
             let d = (dx * dx + dy * dy + dz * dz).sqrt();
-            let valid = d == d;
+            let valid = !d.is_nan();
             sum[u] += if valid { d } else { 0.0 };
             count[u] += if valid { 1.0 } else { 0.0 };
             value[u] = if valid { d } else { f32::INFINITY };

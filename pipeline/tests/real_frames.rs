@@ -58,15 +58,8 @@ fn stairs_top_riser_vs_tread_is_90_deg() {
 }
 
 #[test]
-fn office_wall_vs_floor_is_90_deg_with_the_plane_fits() {
-    check("kinect1-office", SlopeMethod::Tls);
-    check("kinect1-office", SlopeMethod::LeastSquares);
-}
-
-/// Known failure: on the Kinect v1 frame the paper's per-point normals of
-/// the terraced floor are biased (about 86 degrees). See the README.
-#[test]
-#[ignore = "known failure of the paper method on the Kinect v1 office frame"]
-fn office_wall_vs_floor_is_90_deg_with_the_paper_method() {
-    check("kinect1-office", SlopeMethod::Paper);
+fn office_wall_vs_floor_is_90_deg() {
+    for method in SlopeMethod::ALL {
+        check("kinect1-office", method);
+    }
 }

@@ -202,7 +202,7 @@ fn the_message_carries_the_estimate() {
     assert_eq!(msg.method(), Some(SlopeMethod::Paper));
     assert_eq!(msg.slope_deg, e.slope_deg);
     assert_eq!(msg.samples, e.samples);
-    assert_eq!(msg.samples, 100);
+    assert_eq!(msg.samples, 1000);
     assert_eq!(msg.ground_plane, e.ground.expect("ground").coefficients);
     assert_eq!(msg.inclined_inliers, e.inclined.expect("inclined").inliers);
     assert_eq!(msg.ground_from_mount, 0);

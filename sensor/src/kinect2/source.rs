@@ -393,9 +393,7 @@ impl FrameSource for Kinect2Source {
                         self.close();
                     }
                 }
-                Err(err @ Kinect2Error::UnexpectedFrame { .. }) => {
-                    return Err(err.into())
-                }
+                Err(err @ Kinect2Error::UnexpectedFrame { .. }) => return Err(err.into()),
                 Err(err) => {
                     // A failing wait or registration: treat like a lost device.
                     self.stats.lost += 1;
