@@ -335,11 +335,13 @@ pub struct CloudSubscriber {
 impl CloudSubscriber {
     pub fn create(node: &Node<ipc::Service>, names: &ServiceNames) -> Result<Self, IpcError> {
         let name = names.cloud();
+        // The listener exists before the subscriber does, so no notification
+        // for a sample this subscriber can see is ever missed.
+        let listener = TopicListener::create(node, &name)?;
         let subscriber = cloud_service(node, &name)?
             .subscriber_builder()
             .create()
             .map_err(|e| IpcError::new("create a subscriber", &name, e))?;
-        let listener = TopicListener::create(node, &name)?;
         Ok(Self {
             subscriber,
             listener,
@@ -437,11 +439,13 @@ pub struct EstimateSubscriber {
 impl EstimateSubscriber {
     pub fn create(node: &Node<ipc::Service>, names: &ServiceNames) -> Result<Self, IpcError> {
         let name = names.estimate();
+        // The listener exists before the subscriber does, so no notification
+        // for a sample this subscriber can see is ever missed.
+        let listener = TopicListener::create(node, &name)?;
         let subscriber = estimate_service(node, &name)?
             .subscriber_builder()
             .create()
             .map_err(|e| IpcError::new("create a subscriber", &name, e))?;
-        let listener = TopicListener::create(node, &name)?;
         Ok(Self {
             subscriber,
             listener,

@@ -11,6 +11,10 @@ use slope_ipc_types::now_ns;
 use crate::ipc::{CloudPublisher, PublishFrameError};
 use crate::source::{FrameSource, SourceError, SourceFrame};
 
+/// Pacing offsets are capped here (about 115 days), far beyond any real
+/// recording, so that no timestamp in a file can overflow a clock.
+const MAX_PACING_OFFSET_S: f64 = 1e7;
+
 /// Set when the process should stop (SIGINT, SIGTERM); cheap to clone.
 #[derive(Debug, Clone, Default)]
 pub struct StopFlag(Arc<AtomicBool>);
@@ -139,21 +143,28 @@ pub fn publish_stream(
             Err(err) => return Err(err.into()),
         }
         let (start, first_stamp) = *clock.get_or_insert((Instant::now(), frame.source_stamp_ns));
-        let due = match options.pacing {
+        let offset = match options.pacing {
             Pacing::Source => None,
-            Pacing::Recorded { speed } => {
-                let offset_ns = frame.source_stamp_ns.saturating_sub(first_stamp) as f64 / speed;
-                Some(start + Duration::from_nanos(offset_ns as u64))
-            }
-            Pacing::Rate { hz } => Some(start + Duration::from_secs_f64(sent_at_rate as f64 / hz)),
+            Pacing::Recorded { speed } => Some(Duration::from_secs_f64(
+                (frame.source_stamp_ns.saturating_sub(first_stamp) as f64 / 1e9 / speed)
+                    .min(MAX_PACING_OFFSET_S),
+            )),
+            Pacing::Rate { hz } => Some(Duration::from_secs_f64(
+                (sent_at_rate as f64 / hz).min(MAX_PACING_OFFSET_S),
+            )),
         };
-        if let Some(due) = due {
-            if !stop.sleep(due.saturating_duration_since(Instant::now())) {
+        if let Some(offset) = offset {
+            let wait = (start + offset).saturating_duration_since(Instant::now());
+            if !stop.sleep(wait) {
                 stats.stopped = true;
                 break;
             }
         }
-        frame.capture_stamp_ns = now_ns();
+        // Sources that stamp frames on arrival (the camera) keep their stamp;
+        // replayed frames are stamped as they go out.
+        if frame.capture_stamp_ns == 0 {
+            frame.capture_stamp_ns = now_ns();
+        }
         publisher.publish(&frame)?;
         sent_at_rate += 1;
         stats.published += 1;

@@ -91,8 +91,10 @@ pub trait FrameSource {
 /// Plays a recording from disk, optionally over and over.
 ///
 /// With `looping`, frame indices and source stamps keep increasing across
-/// passes (pass `k` adds `k * frames` and `k * (duration + one frame
-/// period)`), so subscribers see one monotonic stream.
+/// passes (pass `k` adds `k * (last index - first index + 1)` and
+/// `k * (duration + one frame period)`), so subscribers see one monotonic
+/// stream with the recording's own gaps. A pass that would overflow the
+/// 64-bit index or stamp ends the stream instead.
 pub struct RecordingSource {
     recording: Recording,
     info: SourceInfo,
@@ -101,6 +103,10 @@ pub struct RecordingSource {
     looping: bool,
     /// Duration of one pass plus one frame period, ns.
     pass_ns: u64,
+    /// Index span of one pass: last index - first index + 1.
+    pass_frames: u64,
+    /// Whether the current pass has yielded a good frame yet.
+    good_in_pass: bool,
 }
 
 impl RecordingSource {
@@ -125,8 +131,12 @@ impl RecordingSource {
                 } else {
                     33_333_333
                 };
-                span + period.max(1)
+                span.saturating_add(period.max(1))
             }
+            _ => 0,
+        };
+        let pass_frames = match (frames.first(), frames.last()) {
+            (Some(first), Some(last)) => (last.index - first.index).saturating_add(1),
             _ => 0,
         };
         Self {
@@ -136,6 +146,8 @@ impl RecordingSource {
             pass: 0,
             looping,
             pass_ns,
+            pass_frames,
+            good_in_pass: false,
         }
     }
 
@@ -163,10 +175,31 @@ impl FrameSource for RecordingSource {
             if !self.looping {
                 return Ok(false);
             }
+            if !self.good_in_pass {
+                tracing::warn!(
+                    recording = %self.recording.dir().display(),
+                    "no frame of the recording could be read in a whole pass; stopping the loop"
+                );
+                return Ok(false);
+            }
             self.next = 0;
             self.pass += 1;
+            self.good_in_pass = false;
         }
+        // Offsets of this pass; a stream that would overflow them ends.
+        let (Some(index_offset), Some(stamp_offset)) = (
+            self.pass.checked_mul(self.pass_frames),
+            self.pass.checked_mul(self.pass_ns),
+        ) else {
+            return Ok(false);
+        };
         let entry = &self.recording.frames()[self.next];
+        let (Some(index), Some(stamp)) = (
+            entry.index.checked_add(index_offset),
+            entry.timestamp_ns.checked_add(stamp_offset),
+        ) else {
+            return Ok(false);
+        };
         self.next += 1;
         let bad = |source: RecordingError| SourceError::BadFrame {
             index: entry.index,
@@ -178,8 +211,107 @@ impl FrameSource for RecordingSource {
             .read_depth_into(entry, &mut frame.depth)
             .map_err(bad)?;
         frame.color = self.recording.read_color(entry).map_err(bad)?;
-        frame.index = entry.index + self.pass * count as u64;
-        frame.source_stamp_ns = entry.timestamp_ns + self.pass * self.pass_ns;
+        frame.index = index;
+        frame.source_stamp_ns = stamp;
+        frame.capture_stamp_ns = 0;
+        self.good_in_pass = true;
         Ok(true)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::recording::{DepthInfo, MountInfo, RecordingMeta, RecordingWriter, TruthInfo};
+
+    /// A two-frame recording whose frames.csv is then rewritten with `rows`.
+    fn recording_with_rows(dir: &std::path::Path, rows: &str) -> Recording {
+        let meta = RecordingMeta {
+            sensor: "test".into(),
+            depth: DepthInfo {
+                width: 2,
+                height: 2,
+                unit_m: 0.001,
+                fx: 1.0,
+                fy: 1.0,
+                cx: 0.5,
+                cy: 0.5,
+            },
+            mount: MountInfo {
+                height_m: None,
+                pitch_deg: None,
+                roll_deg: None,
+            },
+            truth: TruthInfo { slope_deg: None },
+        };
+        let mut writer = RecordingWriter::create(dir, &meta, false).expect("create");
+        let depth = DepthImage {
+            width: 2,
+            height: 2,
+            data: vec![1000, 0, 2000, 3000],
+        };
+        writer.write_frame(0, &depth, None, None).expect("frame 0");
+        writer.write_frame(1, &depth, None, None).expect("frame 1");
+        writer.finish().expect("finish");
+        std::fs::write(dir.join("frames.csv"), rows).expect("rewrite frames.csv");
+        Recording::open(dir).expect("reopen")
+    }
+
+    fn indices(source: &mut RecordingSource, max: usize) -> Vec<(u64, u64)> {
+        let mut frame = SourceFrame::default();
+        let mut out = Vec::new();
+        while out.len() < max && source.next_frame(&mut frame).expect("frame") {
+            out.push((frame.index, frame.source_stamp_ns));
+        }
+        out
+    }
+
+    #[test]
+    fn looping_keeps_indices_and_stamps_increasing_with_the_recordings_gaps() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let rec = recording_with_rows(
+            &dir.path().join("r"),
+            "index,timestamp_ns,depth,color\n0,0,depth/000000.png,\n3,100,depth/000001.png,\n",
+        );
+        let mut source = RecordingSource::new(rec, true);
+        // Pass span: indices 0..=3 (4), stamps 100 + one period of 100.
+        assert_eq!(
+            indices(&mut source, 6),
+            vec![(0, 0), (3, 100), (4, 200), (7, 300), (8, 400), (11, 500)]
+        );
+    }
+
+    #[test]
+    fn huge_stamps_end_a_loop_instead_of_overflowing() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let rows = format!(
+            "index,timestamp_ns,depth,color\n0,0,depth/000000.png,\n{},{},depth/000001.png,\n",
+            u64::MAX - 1,
+            u64::MAX
+        );
+        let rec = recording_with_rows(&dir.path().join("r"), &rows);
+        let mut source = RecordingSource::new(rec, true);
+        // The second pass fits exactly once more (index and stamp u64::MAX),
+        // then the next offset would overflow and the stream ends.
+        assert_eq!(
+            indices(&mut source, 10),
+            vec![(0, 0), (u64::MAX - 1, u64::MAX), (u64::MAX, u64::MAX)]
+        );
+    }
+
+    #[test]
+    fn a_loop_over_only_bad_frames_ends() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let rec = recording_with_rows(
+            &dir.path().join("r"),
+            "index,timestamp_ns,depth,color\n0,0,depth/missing.png,\n",
+        );
+        let mut source = RecordingSource::new(rec, true);
+        let mut frame = SourceFrame::default();
+        assert!(matches!(
+            source.next_frame(&mut frame),
+            Err(SourceError::BadFrame { index: 0, .. })
+        ));
+        assert!(!source.next_frame(&mut frame).expect("ends cleanly"));
     }
 }

@@ -14,7 +14,13 @@ pub struct CommonArgs {
     /// Prefix of the iceoryx2 service names (`<prefix>/cloud`,
     /// `<prefix>/estimate`). Processes talk to each other only when they
     /// share it; tests use a unique one each.
-    #[arg(long, env = SERVICE_PREFIX_ENV, default_value = DEFAULT_SERVICE_PREFIX, global = true)]
+    #[arg(
+        long,
+        env = SERVICE_PREFIX_ENV,
+        default_value = DEFAULT_SERVICE_PREFIX,
+        global = true,
+        value_parser = prefix_arg
+    )]
     pub service_prefix: String,
 
     /// More log output (-v debug, -vv trace). RUST_LOG overrides.
@@ -52,6 +58,21 @@ impl CommonArgs {
     }
 }
 
+/// A service prefix: non-empty, printable, without surrounding slashes.
+pub fn prefix_arg(text: &str) -> Result<String, String> {
+    if text.is_empty() {
+        return Err(format!(
+            "the service prefix is empty (check {SERVICE_PREFIX_ENV}); the default is '{DEFAULT_SERVICE_PREFIX}'"
+        ));
+    }
+    if text.starts_with('/') || text.ends_with('/') || text.chars().any(char::is_control) {
+        return Err(format!(
+            "'{text}' is not a usable service prefix: no leading or trailing '/', no control characters"
+        ));
+    }
+    Ok(text.to_string())
+}
+
 /// Installs the SIGINT/SIGTERM handler and returns the flag it sets.
 pub fn stop_on_signals() -> anyhow::Result<StopFlag> {
     let stop = StopFlag::new();
@@ -70,4 +91,61 @@ pub fn stop_on_signals() -> anyhow::Result<StopFlag> {
 /// A node name for this process: `<program>-<pid>`.
 pub fn node_name(program: &str) -> String {
     format!("{program}-{}", std::process::id())
+}
+
+/// How often a waiting loop wakes without data, to look at the stop flag
+/// and at anything a missed notification would have left waiting.
+pub const WAKE_INTERVAL: std::time::Duration = std::time::Duration::from_millis(100);
+
+/// Sleeps in an iceoryx2 `WaitSet` on `listener` and calls `on_wake` after
+/// every notification and every [`WAKE_INTERVAL`], until `on_wake` returns
+/// `Ok(false)`, fails, or `stop` is set. `on_wake` should take everything
+/// waiting: it is called on the interval too, so data whose notification
+/// was missed is still seen.
+pub fn wait_loop(
+    listener: &slope_sensor::ipc::TopicListener,
+    stop: &StopFlag,
+    mut on_wake: impl FnMut() -> anyhow::Result<bool>,
+) -> anyhow::Result<()> {
+    use iceoryx2::prelude::{ipc, CallbackProgression, SignalHandlingMode, WaitSetBuilder};
+    use iceoryx2::waitset::WaitSetRunResult;
+
+    let waitset = WaitSetBuilder::new()
+        .signal_handling_mode(SignalHandlingMode::Disabled)
+        .create::<ipc::Service>()
+        .map_err(|e| anyhow::anyhow!("failed to create the wait set: {e:?}"))?;
+    let _data = waitset
+        .attach_notification(listener.listener())
+        .map_err(|e| anyhow::anyhow!("failed to attach the listener: {e:?}"))?;
+    let _tick = waitset
+        .attach_interval(WAKE_INTERVAL)
+        .map_err(|e| anyhow::anyhow!("failed to attach the wake interval: {e:?}"))?;
+    let mut failure: Option<anyhow::Error> = None;
+    let mut on_event = |_| {
+        let result = listener
+            .drain()
+            .map_err(anyhow::Error::from)
+            .and_then(|_| on_wake());
+        match result {
+            Ok(true) if !stop.is_stopped() => CallbackProgression::Continue,
+            Ok(_) => CallbackProgression::Stop,
+            Err(err) => {
+                failure = Some(err);
+                CallbackProgression::Stop
+            }
+        }
+    };
+    loop {
+        // A signal may interrupt the wait itself; the stop flag decides.
+        match waitset.wait_and_process(&mut on_event) {
+            Ok(WaitSetRunResult::StopRequest) => break,
+            Ok(_) if stop.is_stopped() => break,
+            Ok(_) => continue,
+            Err(err) => return Err(anyhow::anyhow!("waiting for data failed: {err:?}")),
+        }
+    }
+    match failure {
+        Some(err) => Err(err),
+        None => Ok(()),
+    }
 }

@@ -3,19 +3,14 @@
 use std::io::Write;
 use std::time::{Duration, Instant};
 
-use anyhow::Context;
 use clap::Parser;
-use iceoryx2::prelude::*;
-use iceoryx2::waitset::WaitSetRunResult;
 use serde::Serialize;
 use slope_ipc_types::{EstimateStatus, SlopeEstimate};
 use slope_sensor::ipc::{create_node, EstimateSubscriber};
 use slope_sensor::publish::StopFlag;
 
-use crate::cli::{node_name, CommonArgs};
+use crate::cli::{node_name, wait_loop, CommonArgs};
 use crate::replay::positive_f64;
-
-const STOP_CHECK_INTERVAL: Duration = Duration::from_millis(100);
 
 #[derive(Debug, Parser)]
 #[command(
@@ -121,67 +116,40 @@ pub fn run(args: &EchoArgs, stop: &StopFlag) -> anyhow::Result<u64> {
     let names = args.common.service_names();
     let node = create_node(&node_name("slope-echo"))?;
     let subscriber = EstimateSubscriber::create(&node, &names)?;
-    let waitset = WaitSetBuilder::new()
-        .signal_handling_mode(SignalHandlingMode::Disabled)
-        .create::<ipc::Service>()
-        .map_err(|e| anyhow::anyhow!("failed to create the wait set: {e:?}"))?;
-    let estimate_guard = waitset
-        .attach_notification(subscriber.listener().listener())
-        .map_err(|e| anyhow::anyhow!("failed to attach the estimate listener: {e:?}"))?;
-    let _tick = waitset
-        .attach_interval(STOP_CHECK_INTERVAL)
-        .map_err(|e| anyhow::anyhow!("failed to attach the stop-check interval: {e:?}"))?;
     tracing::info!(service = %names.estimate(), "subscribed to estimates");
 
     let deadline = args
         .timeout
         .map(|s| Instant::now() + Duration::from_secs_f64(s));
     let mut received = 0u64;
-    let mut failure: Option<anyhow::Error> = None;
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     let count_reached = |received: u64| args.count.is_some_and(|c| received >= c);
-    let mut on_event = |id: WaitSetAttachmentId<ipc::Service>| {
-        if id.has_event_from(&estimate_guard) {
-            let result = (|| -> anyhow::Result<()> {
-                subscriber.listener().drain()?;
-                while !count_reached(received) {
-                    let Some(estimate) = subscriber.receive()? else {
-                        break;
-                    };
-                    if args.json {
-                        let line = serde_json::to_string(&EstimateJson::from(&estimate))?;
-                        writeln!(out, "{line}")?;
-                    } else {
-                        writeln!(out, "{}", format_line(&estimate))?;
-                    }
-                    received += 1;
-                }
-                out.flush().context("cannot write to stdout")?;
-                Ok(())
-            })();
-            if let Err(err) = result {
-                failure = Some(err);
-                return CallbackProgression::Stop;
-            }
+    let result = wait_loop(subscriber.listener(), stop, || {
+        while !count_reached(received) {
+            let Some(estimate) = subscriber.receive()? else {
+                break;
+            };
+            let line = if args.json {
+                serde_json::to_string(&EstimateJson::from(&estimate))?
+            } else {
+                format_line(&estimate)
+            };
+            writeln!(out, "{line}").and_then(|()| out.flush())?;
+            received += 1;
         }
         let timed_out = deadline.is_some_and(|d| Instant::now() >= d);
-        if stop.is_stopped() || count_reached(received) || timed_out {
-            CallbackProgression::Stop
-        } else {
-            CallbackProgression::Continue
+        Ok(!count_reached(received) && !timed_out)
+    });
+    if let Err(err) = result {
+        // A reader that went away (`slope-echo --json | head`) is not an error.
+        let closed_pipe = err
+            .downcast_ref::<std::io::Error>()
+            .is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe);
+        if closed_pipe {
+            return Ok(received);
         }
-    };
-    loop {
-        match waitset.wait_and_process(&mut on_event) {
-            Ok(WaitSetRunResult::StopRequest) => break,
-            Ok(_) if stop.is_stopped() => break,
-            Ok(_) => continue,
-            Err(err) => return Err(anyhow::anyhow!("waiting for estimates failed: {err:?}")),
-        }
-    }
-    if let Some(err) = failure {
-        return Err(err);
+        return Err(err.context("slope-echo stopped"));
     }
     if let Some(count) = args.count {
         if received < count && !stop.is_stopped() {

@@ -7,21 +7,15 @@
 //! publisher's shared memory: the pipeline borrows the sample's slice.
 
 use std::path::PathBuf;
-use std::time::Duration;
 
 use anyhow::Context;
 use clap::Parser;
-use iceoryx2::prelude::*;
-use iceoryx2::waitset::WaitSetRunResult;
 use slope_ipc_types::{SlopeEstimate, SlopeMethod};
 use slope_pipeline::{parse_method, CloudView, Estimator, EstimatorConfig};
 use slope_sensor::ipc::{create_node, CloudSubscriber, EstimatePublisher};
 use slope_sensor::publish::StopFlag;
 
-use crate::cli::{node_name, CommonArgs};
-
-/// How often the loop wakes without data to look at the stop flag.
-const STOP_CHECK_INTERVAL: Duration = Duration::from_millis(100);
+use crate::cli::{node_name, wait_loop, CommonArgs};
 
 #[derive(Debug, Parser)]
 #[command(
@@ -96,17 +90,6 @@ pub fn run(args: &EstimatorArgs, stop: &StopFlag) -> anyhow::Result<EstimatorSta
     let node = create_node(&node_name("slope-estimator"))?;
     let subscriber = CloudSubscriber::create(&node, &names)?;
     let publisher = EstimatePublisher::create(&node, &names)?;
-    let waitset = WaitSetBuilder::new()
-        .signal_handling_mode(SignalHandlingMode::Disabled)
-        .create::<ipc::Service>()
-        .map_err(|e| anyhow::anyhow!("failed to create the wait set: {e:?}"))?;
-    let cloud_guard = waitset
-        .attach_notification(subscriber.listener().listener())
-        .map_err(|e| anyhow::anyhow!("failed to attach the cloud listener: {e:?}"))?;
-    let _stop_check = waitset
-        .attach_interval(STOP_CHECK_INTERVAL)
-        .map_err(|e| anyhow::anyhow!("failed to attach the stop-check interval: {e:?}"))?;
-
     tracing::info!(
         method = config.method.name(),
         clouds = subscriber.service_name(),
@@ -121,32 +104,10 @@ pub fn run(args: &EstimatorArgs, stop: &StopFlag) -> anyhow::Result<EstimatorSta
         last_index: None,
         max_frames: args.max_frames,
     };
-    let mut failure: Option<anyhow::Error> = None;
-    let mut on_event = |id: WaitSetAttachmentId<ipc::Service>| {
-        if id.has_event_from(&cloud_guard) {
-            if let Err(err) = worker.on_cloud_event() {
-                failure = Some(err);
-                return CallbackProgression::Stop;
-            }
-        }
-        if stop.is_stopped() || worker.done() {
-            CallbackProgression::Stop
-        } else {
-            CallbackProgression::Continue
-        }
-    };
-    // A signal may interrupt the wait itself; the stop flag decides.
-    loop {
-        match waitset.wait_and_process(&mut on_event) {
-            Ok(WaitSetRunResult::StopRequest) => break,
-            Ok(_) if stop.is_stopped() => break,
-            Ok(_) => continue,
-            Err(err) => return Err(anyhow::anyhow!("waiting for clouds failed: {err:?}")),
-        }
-    }
-    if let Some(err) = failure {
-        return Err(err);
-    }
+    wait_loop(subscriber.listener(), stop, || {
+        worker.on_cloud_event()?;
+        Ok(!worker.done())
+    })?;
     tracing::info!(
         processed = worker.stats.processed,
         dropped = worker.stats.dropped,
@@ -171,7 +132,6 @@ impl Worker<'_> {
     }
 
     fn on_cloud_event(&mut self) -> anyhow::Result<()> {
-        self.subscriber.listener().drain()?;
         let (sample, skipped) = self.subscriber.receive_newest()?;
         let Some(sample) = sample else {
             return Ok(());

@@ -63,6 +63,11 @@ pub struct ReplayArgs {
     #[arg(long)]
     pub skip_bad_frames: bool,
 
+    /// Keep the publisher up this long after the last frame, so that
+    /// subscribers still read what is queued for them (skipped on Ctrl-C).
+    #[arg(long, default_value_t = 1.0, value_parser = positive_f64)]
+    pub linger: f64,
+
     /// Largest cloud (width x height) to accept.
     #[arg(long, default_value_t = DEFAULT_MAX_CLOUD_POINTS)]
     pub max_points: usize,
@@ -71,14 +76,22 @@ pub struct ReplayArgs {
     pub common: CommonArgs,
 }
 
+/// Smallest and largest value [`positive_f64`] accepts: rates, speeds and
+/// timeouts outside this range are typing errors, and would overflow clocks.
+pub const POSITIVE_RANGE: (f64, f64) = (1e-3, 1e7);
+
+/// Parses a positive number within [`POSITIVE_RANGE`].
 pub fn positive_f64(text: &str) -> Result<f64, String> {
     let value: f64 = text
         .parse()
         .map_err(|_| format!("'{text}' is not a number"))?;
-    if value.is_finite() && value > 0.0 {
+    let (min, max) = POSITIVE_RANGE;
+    if (min..=max).contains(&value) {
         Ok(value)
     } else {
-        Err(format!("'{text}' must be a positive number"))
+        Err(format!(
+            "'{text}' must be a positive number from {min} to {max}"
+        ))
     }
 }
 
@@ -86,6 +99,12 @@ pub fn run(args: &ReplayArgs, stop: &StopFlag) -> anyhow::Result<PublishStats> {
     let recording = Recording::open(&args.recording)
         .with_context(|| format!("cannot replay {}", args.recording.display()))?;
     let frames = recording.frames().len();
+    if frames == 0 {
+        anyhow::bail!(
+            "cannot replay {}: its frames.csv lists no frames",
+            args.recording.display()
+        );
+    }
     let mut source = RecordingSource::new(recording, args.looping);
     let names = args.common.service_names();
     let node = create_node(&node_name("slope-replay"))?;
@@ -110,6 +129,11 @@ pub fn run(args: &ReplayArgs, stop: &StopFlag) -> anyhow::Result<PublishStats> {
         skip_bad_frames: args.skip_bad_frames,
     };
     let stats = publish_stream(&mut source, &publisher, &options, stop)?;
+    if !stats.stopped {
+        // Leaving at once would take the last samples with us before a
+        // subscriber that is still connecting could read them.
+        stop.sleep(Duration::from_secs_f64(args.linger));
+    }
     tracing::info!(
         published = stats.published,
         skipped_bad = stats.skipped_bad,

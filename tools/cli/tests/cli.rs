@@ -16,11 +16,12 @@ fn run(bin: &str, args: &[&str]) -> (bool, String, String) {
     )
 }
 
-const BINARIES: [(&str, &str); 4] = [
+const BINARIES: [(&str, &str); 5] = [
     ("slope-replay", env!("CARGO_BIN_EXE_slope-replay")),
     ("slope-estimator", env!("CARGO_BIN_EXE_slope-estimator")),
     ("slope-echo", env!("CARGO_BIN_EXE_slope-echo")),
     ("slope-demo", env!("CARGO_BIN_EXE_slope-demo")),
+    ("slope-record", env!("CARGO_BIN_EXE_slope-record")),
 ];
 
 #[test]
@@ -59,4 +60,13 @@ fn bad_values_are_refused() {
     let (ok, _, stderr) = run(estimator, &["--method", "magic"]);
     assert!(!ok);
     assert!(stderr.contains("paper, least-squares or tls"), "{stderr}");
+    // Values that would overflow a clock are refused, not panicked on.
+    let echo = env!("CARGO_BIN_EXE_slope-echo");
+    let (ok, _, stderr) = run(echo, &["--timeout", "1e300"]);
+    assert!(!ok);
+    assert!(stderr.contains("from 0.001 to 10000000"), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    let (ok, _, stderr) = run(echo, &["--service-prefix", ""]);
+    assert!(!ok);
+    assert!(stderr.contains("service prefix is empty"), "{stderr}");
 }
