@@ -325,20 +325,31 @@ impl CloudSample {
     }
 }
 
-/// Subscribes to clouds and wakes on the cloud event.
-pub struct CloudSubscriber {
-    subscriber: Subscriber<ipc::Service, [CloudPoint], CloudHeader>,
+/// A subscriber together with the listener on its topic's event service.
+struct TopicSubscriber<
+    Payload: Debug + IceoryxSend + ?Sized + 'static,
+    Header: Debug + ZeroCopySend,
+> {
+    subscriber: Subscriber<ipc::Service, Payload, Header>,
     listener: TopicListener,
     name: String,
 }
 
-impl CloudSubscriber {
-    pub fn create(node: &Node<ipc::Service>, names: &ServiceNames) -> Result<Self, IpcError> {
-        let name = names.cloud();
+impl<Payload: Debug + IceoryxSend + ?Sized + 'static, Header: Debug + ZeroCopySend>
+    TopicSubscriber<Payload, Header>
+{
+    fn create(
+        node: &Node<ipc::Service>,
+        name: String,
+        service: impl FnOnce(
+            &Node<ipc::Service>,
+            &str,
+        ) -> Result<PubSubFactory<ipc::Service, Payload, Header>, IpcError>,
+    ) -> Result<Self, IpcError> {
         // The listener exists before the subscriber does, so no notification
         // for a sample this subscriber can see is ever missed.
         let listener = TopicListener::create(node, &name)?;
-        let subscriber = cloud_service(node, &name)?
+        let subscriber = service(node, &name)?
             .subscriber_builder()
             .create()
             .map_err(|e| IpcError::new("create a subscriber", &name, e))?;
@@ -348,20 +359,34 @@ impl CloudSubscriber {
             name,
         })
     }
+}
+
+/// Subscribes to clouds and wakes on the cloud event.
+pub struct CloudSubscriber {
+    topic: TopicSubscriber<[CloudPoint], CloudHeader>,
+}
+
+impl CloudSubscriber {
+    pub fn create(node: &Node<ipc::Service>, names: &ServiceNames) -> Result<Self, IpcError> {
+        Ok(Self {
+            topic: TopicSubscriber::create(node, names.cloud(), cloud_service)?,
+        })
+    }
 
     pub fn listener(&self) -> &TopicListener {
-        &self.listener
+        &self.topic.listener
     }
 
     pub fn service_name(&self) -> &str {
-        &self.name
+        &self.topic.name
     }
 
     pub fn receive(&self) -> Result<Option<CloudSample>, IpcError> {
-        self.subscriber
+        self.topic
+            .subscriber
             .receive()
             .map(|s| s.map(|sample| CloudSample { sample }))
-            .map_err(|e| IpcError::new("receive a cloud", &self.name, e))
+            .map_err(|e| IpcError::new("receive a cloud", &self.topic.name, e))
     }
 
     /// Receives everything waiting and returns the newest cloud, with how
@@ -431,36 +456,25 @@ impl EstimatePublisher {
 
 /// Subscribes to slope estimates and wakes on the estimate event.
 pub struct EstimateSubscriber {
-    subscriber: Subscriber<ipc::Service, SlopeEstimate, ()>,
-    listener: TopicListener,
-    name: String,
+    topic: TopicSubscriber<SlopeEstimate, ()>,
 }
 
 impl EstimateSubscriber {
     pub fn create(node: &Node<ipc::Service>, names: &ServiceNames) -> Result<Self, IpcError> {
-        let name = names.estimate();
-        // The listener exists before the subscriber does, so no notification
-        // for a sample this subscriber can see is ever missed.
-        let listener = TopicListener::create(node, &name)?;
-        let subscriber = estimate_service(node, &name)?
-            .subscriber_builder()
-            .create()
-            .map_err(|e| IpcError::new("create a subscriber", &name, e))?;
         Ok(Self {
-            subscriber,
-            listener,
-            name,
+            topic: TopicSubscriber::create(node, names.estimate(), estimate_service)?,
         })
     }
 
     pub fn listener(&self) -> &TopicListener {
-        &self.listener
+        &self.topic.listener
     }
 
     pub fn receive(&self) -> Result<Option<SlopeEstimate>, IpcError> {
-        self.subscriber
+        self.topic
+            .subscriber
             .receive()
             .map(|s| s.map(|sample| *sample.payload()))
-            .map_err(|e| IpcError::new("receive an estimate", &self.name, e))
+            .map_err(|e| IpcError::new("receive an estimate", &self.topic.name, e))
     }
 }
