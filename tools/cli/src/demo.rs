@@ -27,7 +27,9 @@ pub const BIN_DIR_ENV: &str = "SLOPE_BIN_DIR";
 
 /// The bundled recording the demo plays when given none.
 pub fn bundled_recording() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/recordings/ramp16")
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/recordings/ramp16");
+    // Shown to the user: without the `..` when the checkout is still there.
+    std::fs::canonicalize(&path).unwrap_or(path)
 }
 
 #[derive(Debug, Parser)]
@@ -46,7 +48,8 @@ plays the bundled 16-degree ramp recording.",
   slope-demo --rate 5                          # slower than the recorded 30 Hz"
 )]
 pub struct DemoArgs {
-    /// Recording to play (default: the bundled 16° ramp).
+    /// Recording to play (default: the bundled 16° ramp in the source
+    /// checkout's tests/recordings/ramp16; installed binaries need this flag).
     #[arg(long)]
     pub recording: Option<PathBuf>,
 
