@@ -13,7 +13,12 @@
 #include <libfreenect2/packet_pipeline.h>
 #include <libfreenect2/registration.h>
 
+#include <chrono>
+#include <condition_variable>
 #include <cstring>
+#include <map>
+#include <mutex>
+#include <set>
 #include <string>
 
 namespace {
@@ -149,9 +154,86 @@ struct f2s_device {
   libfreenect2::Freenect2Device *device;
 };
 
+// Our own frame listener instead of libfreenect2::SyncMultiFrameListener:
+// that one ignores the timeout of waitForNewFrame unless libfreenect2 was
+// built with ENABLE_CXX11 (its TinyThread build waits forever), which would
+// make frame timeouts, reconnection and stop requests impossible. This one
+// always waits with std::condition_variable::wait_for.
+//
+// libfreenect2's colour and depth threads call onNewFrame concurrently; the
+// waiting thread takes a complete set (one frame of every subscribed type)
+// and holds it until release. Frames arriving while a set is held are given
+// back to libfreenect2 (onNewFrame returns false), as libfreenect2's own
+// listener does; a newer frame of a type replaces an older pending one.
+class TimedFrameListener : public libfreenect2::FrameListener {
+ public:
+  explicit TimedFrameListener(unsigned int types)
+      : subscribed_(types), ready_(0), released_(true) {}
+
+  virtual ~TimedFrameListener() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    delete_all(pending_);
+  }
+
+  virtual bool onNewFrame(libfreenect2::Frame::Type type, libfreenect2::Frame *frame) {
+    if ((subscribed_ & static_cast<unsigned int>(type)) == 0) return false;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (!released_) return false;
+      libfreenect2::FrameMap::iterator it = pending_.find(type);
+      if (it != pending_.end()) {
+        delete it->second;
+        it->second = frame;
+      } else {
+        pending_[type] = frame;
+      }
+      ready_ |= static_cast<unsigned int>(type);
+    }
+    condition_.notify_one();
+    return true;
+  }
+
+  // Moves a complete set into `out` (which must be empty); false when none
+  // arrived within `timeout_ms`.
+  bool wait(libfreenect2::FrameMap &out, int32_t timeout_ms) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    const std::chrono::milliseconds timeout(timeout_ms < 0 ? 0 : timeout_ms);
+    if (!condition_.wait_for(lock, timeout, [this] { return ready_ == subscribed_; })) {
+      return false;
+    }
+    out.swap(pending_);
+    pending_.clear();
+    ready_ = 0;
+    released_ = false;
+    return true;
+  }
+
+  // Deletes a set taken by wait and accepts frames again.
+  void release(libfreenect2::FrameMap &frames) {
+    delete_all(frames);
+    std::lock_guard<std::mutex> lock(mutex_);
+    released_ = true;
+  }
+
+ private:
+  static void delete_all(libfreenect2::FrameMap &frames) {
+    for (libfreenect2::FrameMap::iterator it = frames.begin(); it != frames.end(); ++it) {
+      delete it->second;
+    }
+    frames.clear();
+  }
+
+  std::mutex mutex_;
+  std::condition_variable condition_;
+  libfreenect2::FrameMap pending_;
+  const unsigned int subscribed_;
+  unsigned int ready_;
+  bool released_;
+};
+
 struct f2s_listener {
   explicit f2s_listener(unsigned int types) : listener(types), holding(false) {}
-  libfreenect2::SyncMultiFrameListener listener;
+  TimedFrameListener listener;
   libfreenect2::FrameMap frames;
   bool holding;
 };
@@ -419,10 +501,7 @@ f2s_status f2s_listener_wait(f2s_listener *listener, int32_t timeout_ms) {
   if (!listener) return F2S_ERR_NULL_ARGUMENT;
   f2s_listener_release(listener);
   F2S_GUARD_BEGIN
-  if (!listener->listener.waitForNewFrame(listener->frames, timeout_ms)) {
-    listener->frames.clear();
-    return F2S_ERR_TIMEOUT;
-  }
+  if (!listener->listener.wait(listener->frames, timeout_ms)) return F2S_ERR_TIMEOUT;
   listener->holding = true;
   return F2S_OK;
   F2S_GUARD_END

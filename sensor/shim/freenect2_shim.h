@@ -11,7 +11,14 @@
  * - a listener given to a device must outlive the device (free the device
  *   first: its destructor stops the streams and joins the processing threads);
  * - frame views returned by f2s_listener_frame are valid until
- *   f2s_listener_release or the next f2s_listener_wait on that listener.
+ *   f2s_listener_release or the next f2s_listener_wait on that listener;
+ * - opening a device that is already open returns libfreenect2's existing
+ *   device object again: never free it twice (the Rust layer refuses a
+ *   second open of a serial).
+ *
+ * The listener is the shim's own (std::mutex + std::condition_variable), not
+ * libfreenect2's SyncMultiFrameListener, whose timed wait blocks for good
+ * unless libfreenect2 was built with ENABLE_CXX11.
  */
 #ifndef SLOPE_FREENECT2_SHIM_H
 #define SLOPE_FREENECT2_SHIM_H

@@ -69,6 +69,45 @@ fn opening_without_a_device_fails_cleanly() {
     }
 }
 
+/// libfreenect2 returns the same device object for a second open; the
+/// binding must refuse it instead (two owners would free it twice). Needs
+/// a Kinect v2; without one, checks that a failed open leaves nothing
+/// marked open.
+#[test]
+fn a_device_cannot_be_opened_twice() {
+    let context = Context::new().expect("libfreenect2 context");
+    let serials = context.enumerate().expect("enumerate");
+    let Some(serial) = serials.first().cloned() else {
+        assert!(context
+            .open(&DeviceSelector::First, Pipeline::Cpu, None)
+            .is_err());
+        assert!(!context.is_open("012345678912"));
+        eprintln!("no Kinect v2 connected; the second-open check needs one");
+        return;
+    };
+    let device = context
+        .open(&DeviceSelector::Serial(serial.clone()), Pipeline::Cpu, None)
+        .expect("first open");
+    assert!(context.is_open(&serial));
+    for selector in [
+        DeviceSelector::First,
+        DeviceSelector::Serial(serial.clone()),
+    ] {
+        match context.open(&selector, Pipeline::Cpu, None) {
+            Err(Kinect2Error::AlreadyOpen { serial: s }) => assert_eq!(s, serial),
+            Err(other) => panic!("expected AlreadyOpen, got {other}"),
+            Ok(_) => panic!("opened {serial} twice"),
+        }
+    }
+    drop(device);
+    assert!(!context.is_open(&serial));
+    drop(
+        context
+            .open(&DeviceSelector::Serial(serial), Pipeline::Cpu, None)
+            .expect("open again after closing"),
+    );
+}
+
 #[test]
 fn unavailable_pipelines_are_refused_by_name() {
     assert!(

@@ -54,10 +54,23 @@ pub fn recording(name: &str) -> PathBuf {
     repo_root().join("tests/recordings").join(name)
 }
 
-/// The real Kinect frames in ../shared/data, when present.
+/// Set (to anything) to make a missing ../shared/data a failure instead of
+/// a skipped test; CI sets it.
+pub const REQUIRE_SHARED_DATA_ENV: &str = "SLOPE_REQUIRE_SHARED_DATA";
+
+/// The real Kinect frames in ../shared/data, when present. Panics when they
+/// are missing and [`REQUIRE_SHARED_DATA_ENV`] is set.
 pub fn shared_data(name: &str) -> Option<PathBuf> {
     let path = repo_root().join("../shared/data").join(name);
-    path.is_dir().then_some(path)
+    if path.is_dir() {
+        return Some(path);
+    }
+    assert!(
+        std::env::var_os(REQUIRE_SHARED_DATA_ENV).is_none(),
+        "{} is missing and {REQUIRE_SHARED_DATA_ENV} is set",
+        path.display()
+    );
+    None
 }
 
 /// A service prefix no other test (or running stack) uses.

@@ -38,12 +38,14 @@ pub fn unmirrored_intrinsics(ir: &IrParams, width: u32) -> Intrinsics {
 
 /// libfreenect2's depth (float millimetres; non-positive, NaN or infinite
 /// means no reading) as a whole number of millimetres, 0 for no reading.
-/// Depth beyond 65.535 m (far outside the sensor's range) saturates.
+/// Depth that rounds beyond 65535 mm cannot be stored and is no reading
+/// either (0), never a bogus 65.535 m.
 #[inline]
 pub fn depth_mm_to_count(depth_mm: f32) -> u16 {
-    if depth_mm.is_finite() && depth_mm > 0.0 {
-        // `as` saturates, and the value is finite and positive.
-        depth_mm.round() as u16
+    let mm = depth_mm.round();
+    if mm.is_finite() && mm > 0.0 && mm <= f32::from(u16::MAX) {
+        // Exact: a whole number in 1..=65535.
+        mm as u16
     } else {
         0
     }
@@ -111,7 +113,9 @@ mod tests {
         assert_eq!(depth_mm_to_count(-5.0), 0);
         assert_eq!(depth_mm_to_count(f32::NAN), 0);
         assert_eq!(depth_mm_to_count(f32::INFINITY), 0);
-        assert_eq!(depth_mm_to_count(1e9), u16::MAX);
+        assert_eq!(depth_mm_to_count(65_535.4), u16::MAX);
+        assert_eq!(depth_mm_to_count(65_535.5), 0);
+        assert_eq!(depth_mm_to_count(1e9), 0);
     }
 
     #[test]

@@ -11,6 +11,7 @@
 //!   streams or wait again while its frames are in use, and gives the frames
 //!   back to libfreenect2 when dropped.
 
+use std::collections::HashSet;
 use std::ffi::c_char;
 use std::fmt;
 use std::marker::PhantomData;
@@ -19,7 +20,7 @@ use std::str::FromStr;
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Duration;
 
-use super::error::{Kinect2Error, ShimStatus};
+use super::error::{check, non_null, Kinect2Error, ShimStatus};
 use super::log;
 use super::sys;
 
@@ -37,24 +38,6 @@ pub fn library_version() -> String {
     // SAFETY: f2s_version returns a pointer to a static NUL-terminated string.
     let version = unsafe { std::ffi::CStr::from_ptr(sys::f2s_version()) };
     version.to_string_lossy().into_owned()
-}
-
-fn check(
-    status: sys::f2s_status,
-    action: &'static str,
-    serial: Option<&str>,
-) -> Result<(), Kinect2Error> {
-    let status = ShimStatus::from_raw(status);
-    if status.is_ok() {
-        Ok(())
-    } else {
-        Err(Kinect2Error::Operation {
-            action,
-            serial: serial.map(str::to_string),
-            status,
-            libfreenect2_log: log::take_last_problem(),
-        })
-    }
 }
 
 /// Reads a string through a shim call that fills a caller buffer.
@@ -270,34 +253,92 @@ impl ColorParams {
     }
 }
 
-/// Owns a libfreenect2::Freenect2.
-struct ContextHandle(NonNull<sys::f2s_context>);
+/// Owns a libfreenect2::Freenect2 and knows which of its devices are open.
+struct ContextState {
+    handle: NonNull<sys::f2s_context>,
+    /// Serials of the devices opened through this context and not yet
+    /// dropped: libfreenect2's openDevice returns the *same* device object
+    /// for a second open, which two owners would then both free.
+    open: OpenSerials,
+}
 
 // SAFETY: libfreenect2::Freenect2 has no thread affinity (its USB event thread
-// is internal); every use goes through the Mutex in `Context`, so it is never
-// used from two threads at once.
-unsafe impl Send for ContextHandle {}
+// is internal); every use goes through the Mutex in `Context` (devices lock
+// it too), so it is never used from two threads at once.
+unsafe impl Send for ContextState {}
 
-impl Drop for ContextHandle {
+impl Drop for ContextState {
     fn drop(&mut self) {
         // SAFETY: the pointer came from f2s_context_new and is freed once,
-        // here. Every Device holds an Arc to this handle, so no device of
+        // here. Every Device holds an Arc to this state, so no device of
         // this context is alive any more.
-        unsafe { sys::f2s_context_free(self.0.as_ptr()) };
+        unsafe { sys::f2s_context_free(self.handle.as_ptr()) };
     }
 }
 
-type SharedContext = Arc<Mutex<ContextHandle>>;
+/// The serials of the open devices of one context.
+#[derive(Debug, Default)]
+pub(crate) struct OpenSerials(HashSet<String>);
 
-fn lock(context: &SharedContext) -> MutexGuard<'_, ContextHandle> {
+impl OpenSerials {
+    /// Marks `serial` open; [`Kinect2Error::AlreadyOpen`] if it already is.
+    pub(crate) fn claim(&mut self, serial: &str) -> Result<(), Kinect2Error> {
+        if self.0.insert(serial.to_string()) {
+            Ok(())
+        } else {
+            Err(Kinect2Error::AlreadyOpen {
+                serial: serial.to_string(),
+            })
+        }
+    }
+
+    /// Marks `serial` closed.
+    pub(crate) fn release(&mut self, serial: &str) {
+        self.0.remove(serial);
+    }
+
+    pub(crate) fn is_open(&self, serial: &str) -> bool {
+        self.0.contains(serial)
+    }
+}
+
+type SharedContext = Arc<Mutex<ContextState>>;
+
+fn lock(context: &SharedContext) -> MutexGuard<'_, ContextState> {
     // A panic while holding the lock cannot leave the C++ object half
-    // updated (the shim catches everything), so a poisoned lock is usable.
+    // updated (the shim catches everything), and the serial set is only
+    // changed by single inserts/removes, so a poisoned lock is usable.
     context
         .lock()
         .unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
-/// The libfreenect2 context: enumerates and opens devices.
+/// The serials of the enumerated devices (the caller holds the lock).
+fn enumerate_locked(state: &ContextState) -> Result<Vec<String>, Kinect2Error> {
+    let context = state.handle.as_ptr();
+    let mut count = 0i32;
+    log::clear_last_problem();
+    // SAFETY: `context` is alive (the caller holds its lock) and `count` is
+    // writable.
+    check(
+        unsafe { sys::f2s_context_enumerate(context, &mut count) },
+        "enumerate USB devices",
+        None,
+    )?;
+    (0..count)
+        .map(|index| {
+            read_string("read a device serial", None, |buffer, capacity, length| {
+                // SAFETY: `context` is alive; `buffer` holds `capacity`
+                // writable bytes; `length` is writable.
+                unsafe { sys::f2s_context_serial(context, index, buffer, capacity, length) }
+            })
+        })
+        .collect()
+}
+
+/// The libfreenect2 context: enumerates and opens devices. One context may
+/// be shared between threads; every call into libfreenect2 through it or
+/// its devices is serialised by one lock.
 pub struct Context {
     inner: SharedContext,
 }
@@ -307,50 +348,35 @@ impl Context {
     /// libfreenect2's log into `tracing` on first use.
     pub fn new() -> Result<Self, Kinect2Error> {
         log::install();
+        let action = "create the libfreenect2 context";
         let mut raw = std::ptr::null_mut();
         // SAFETY: `raw` is a valid out-pointer.
-        check(
-            unsafe { sys::f2s_context_new(&mut raw) },
-            "create the libfreenect2 context",
-            None,
-        )?;
-        let handle = NonNull::new(raw).ok_or(Kinect2Error::Operation {
-            action: "create the libfreenect2 context",
-            serial: None,
-            status: ShimStatus(sys::f2s_status::F2S_ERR_NULL_ARGUMENT.0),
-            libfreenect2_log: None,
-        })?;
+        check(unsafe { sys::f2s_context_new(&mut raw) }, action, None)?;
+        let handle = non_null(raw, action, None)?;
         Ok(Self {
-            inner: Arc::new(Mutex::new(ContextHandle(handle))),
+            inner: Arc::new(Mutex::new(ContextState {
+                handle,
+                open: OpenSerials::default(),
+            })),
         })
     }
 
     /// Re-enumerates the USB bus and returns the serials of the connected
     /// Kinect v2 devices, in enumeration order.
     pub fn enumerate(&self) -> Result<Vec<String>, Kinect2Error> {
-        let guard = lock(&self.inner);
-        let context = guard.0.as_ptr();
-        let mut count = 0i32;
-        log::clear_last_problem();
-        // SAFETY: `context` is alive (we hold its lock) and `count` is writable.
-        check(
-            unsafe { sys::f2s_context_enumerate(context, &mut count) },
-            "enumerate USB devices",
-            None,
-        )?;
-        (0..count)
-            .map(|index| {
-                read_string("read a device serial", None, |buffer, capacity, length| {
-                    // SAFETY: `context` is alive; `buffer` holds `capacity`
-                    // writable bytes; `length` is writable.
-                    unsafe { sys::f2s_context_serial(context, index, buffer, capacity, length) }
-                })
-            })
-            .collect()
+        enumerate_locked(&lock(&self.inner))
+    }
+
+    /// True while a [`Device`] with this serial, opened through this
+    /// context, is alive.
+    pub fn is_open(&self, serial: &str) -> bool {
+        lock(&self.inner).open.is_open(serial)
     }
 
     /// Opens a device with a depth pipeline. `gpu_device` picks the OpenCL
-    /// or CUDA device (`None`: libfreenect2's default).
+    /// or CUDA device (`None`: libfreenect2's default). A device that is
+    /// already open through this context is refused
+    /// ([`Kinect2Error::AlreadyOpen`]).
     pub fn open(
         &self,
         selector: &DeviceSelector,
@@ -367,52 +393,67 @@ impl Context {
                     .join(", "),
             });
         }
-        let serials = self.enumerate()?;
+        // One lock from enumeration to the open: nothing else in this
+        // process can open or free a device in between.
+        let mut state = lock(&self.inner);
+        let serials = enumerate_locked(&state)?;
         if serials.is_empty() {
             return Err(Kinect2Error::NoDevice {
                 version: library_version(),
                 libfreenect2_log: log::take_last_problem(),
             });
         }
-        let (index, serial) = match selector {
-            DeviceSelector::First => (0, serials[0].clone()),
+        let serial = match selector {
+            DeviceSelector::First => serials[0].clone(),
             DeviceSelector::Index(index) => match serials.get(*index as usize) {
-                Some(serial) => (*index, serial.clone()),
+                Some(serial) => serial.clone(),
                 None => {
                     return Err(Kinect2Error::IndexOutOfRange {
                         index: *index,
-                        count: serials.len() as u32,
+                        count: u32::try_from(serials.len()).unwrap_or(u32::MAX),
                     })
                 }
             },
-            DeviceSelector::Serial(wanted) => match serials.iter().position(|s| s == wanted) {
-                Some(index) => (index as u32, wanted.clone()),
-                None => {
+            DeviceSelector::Serial(wanted) => {
+                if !serials.contains(wanted) {
                     return Err(Kinect2Error::SerialNotFound {
                         serial: wanted.clone(),
                         connected: serials,
-                    })
+                    });
                 }
-            },
+                wanted.clone()
+            }
         };
+        let c_serial = std::ffi::CString::new(serial.as_str())
+            .map_err(|_| Kinect2Error::InvalidSerial(serial.clone()))?;
+        state.open.claim(&serial)?;
         let gpu = gpu_device.map_or(-1, |id| i32::try_from(id).unwrap_or(i32::MAX));
-        let index = i32::try_from(index).unwrap_or(i32::MAX);
-        let guard = lock(&self.inner);
         let mut raw = std::ptr::null_mut();
         log::clear_last_problem();
-        // SAFETY: the context is alive (we hold its lock); `raw` is a valid
-        // out-pointer. The shim hands the pipeline's ownership to libfreenect2.
+        // SAFETY: the context is alive (we hold its lock); `c_serial` is a
+        // NUL-terminated string; `raw` is a valid out-pointer. The shim hands
+        // the pipeline's ownership to libfreenect2. Opening by serial (not by
+        // the index enumerated above) cannot pick another device should the
+        // bus change underneath.
         let status = unsafe {
-            sys::f2s_context_open_index(guard.0.as_ptr(), index, pipeline.raw(), gpu, &mut raw)
+            sys::f2s_context_open_serial(
+                state.handle.as_ptr(),
+                c_serial.as_ptr(),
+                pipeline.raw(),
+                gpu,
+                &mut raw,
+            )
         };
-        drop(guard);
-        check(status, "open the device", Some(&serial))?;
-        let handle = NonNull::new(raw).ok_or_else(|| Kinect2Error::Operation {
-            action: "open the device",
-            serial: Some(serial.clone()),
-            status: ShimStatus(sys::f2s_status::F2S_ERR_OPEN_FAILED.0),
-            libfreenect2_log: log::take_last_problem(),
-        })?;
+        let handle = check(status, "open the device", Some(&serial))
+            .and_then(|()| non_null(raw, "open the device", Some(&serial)));
+        let handle = match handle {
+            Ok(handle) => handle,
+            Err(err) => {
+                state.open.release(&serial);
+                return Err(err);
+            }
+        };
+        drop(state);
         Ok(Device {
             handle,
             context: Arc::clone(&self.inner),
@@ -454,7 +495,8 @@ impl Streams {
     }
 }
 
-/// Owns a libfreenect2::SyncMultiFrameListener.
+/// Owns the shim's frame listener (a mutex and condition variable; its waits
+/// honour their timeout whatever threading libfreenect2 was built with).
 struct Listener {
     handle: NonNull<sys::f2s_listener>,
     types: u32,
@@ -462,24 +504,20 @@ struct Listener {
 
 impl Listener {
     fn new(types: u32, serial: &str) -> Result<Self, Kinect2Error> {
+        let action = "create a frame listener";
         let mut raw = std::ptr::null_mut();
         // SAFETY: `raw` is a valid out-pointer.
         check(
             unsafe { sys::f2s_listener_new(types, &mut raw) },
-            "create a frame listener",
+            action,
             Some(serial),
         )?;
-        let handle = NonNull::new(raw).ok_or_else(|| Kinect2Error::Operation {
-            action: "create a frame listener",
-            serial: Some(serial.to_string()),
-            status: ShimStatus(sys::f2s_status::F2S_ERR_NULL_ARGUMENT.0),
-            libfreenect2_log: None,
-        })?;
+        let handle = non_null(raw, action, Some(serial))?;
         Ok(Self { handle, types })
     }
 }
 
-// SAFETY: SyncMultiFrameListener synchronises internally (a mutex and a
+// SAFETY: the shim's listener synchronises internally (a mutex and a
 // condition variable) between libfreenect2's threads and the waiting one.
 unsafe impl Send for Listener {}
 
@@ -507,7 +545,9 @@ pub struct Device {
 }
 
 // SAFETY: a Freenect2Device has no thread affinity; all mutation goes through
-// `&mut self`, and the context it touches on drop is behind a Mutex.
+// `&mut self`, and every call into libfreenect2 on it (which may touch its
+// context) holds the context's Mutex. Waiting touches only our own listener,
+// which synchronises internally.
 unsafe impl Send for Device {}
 
 impl fmt::Debug for Device {
@@ -534,6 +574,7 @@ impl Device {
     }
 
     pub fn firmware_version(&mut self) -> Result<String, Kinect2Error> {
+        let _context = lock(&self.context);
         let device = self.handle.as_ptr();
         read_string(
             "read the firmware version",
@@ -554,6 +595,7 @@ impl Device {
             bilateral_filter: i32::from(config.bilateral_filter),
             edge_aware_filter: i32::from(config.edge_aware_filter),
         };
+        let _context = lock(&self.context);
         // SAFETY: the device is open and `raw` is a valid config.
         let status = unsafe { sys::f2s_device_set_config(self.handle.as_ptr(), &raw) };
         check(status, "configure depth processing", Some(&self.serial))
@@ -563,6 +605,7 @@ impl Device {
     /// device during [`Device::start`]; before that they are placeholders.
     pub fn ir_params(&mut self) -> Result<IrParams, Kinect2Error> {
         let mut raw = sys::f2s_ir_params::default();
+        let _context = lock(&self.context);
         // SAFETY: the device is open and `raw` is writable.
         let status = unsafe { sys::f2s_device_ir_params(self.handle.as_ptr(), &mut raw) };
         check(status, "read the IR camera parameters", Some(&self.serial))?;
@@ -572,6 +615,7 @@ impl Device {
     /// The colour camera's factory parameters (valid after start, as above).
     pub fn color_params(&mut self) -> Result<ColorParams, Kinect2Error> {
         let mut raw = sys::f2s_color_params::default();
+        let _context = lock(&self.context);
         // SAFETY: the device is open and `raw` is writable.
         let status = unsafe { sys::f2s_device_color_params(self.handle.as_ptr(), &mut raw) };
         check(
@@ -588,6 +632,7 @@ impl Device {
             self.stop()?;
         }
         let types = streams.frame_types();
+        let _context = lock(&self.context);
         if self.listener.as_ref().map(|l| l.types) != Some(types) {
             let listener = Listener::new(types, &self.serial)?;
             // SAFETY: the device is open and not streaming; the listener
@@ -622,6 +667,7 @@ impl Device {
         }
         self.streaming = false;
         log::clear_last_problem();
+        let _context = lock(&self.context);
         // SAFETY: the device is open.
         let status = unsafe { sys::f2s_device_stop(self.handle.as_ptr()) };
         check(status, "stop the streams", Some(&self.serial))
@@ -663,13 +709,14 @@ impl Drop for Device {
                 tracing::warn!(error = %err, "stopping the Kinect v2 streams failed");
             }
         }
-        let guard = lock(&self.context);
+        let mut context = lock(&self.context);
         // SAFETY: the pointer came from f2s_context_open_* and is freed once,
         // here, while its context is alive (we hold an Arc and its lock). The
         // destructor closes the device and joins its processing threads, so
         // afterwards nothing delivers to our listeners.
         unsafe { sys::f2s_device_free(self.handle.as_ptr()) };
-        drop(guard);
+        context.open.release(&self.serial);
+        drop(context);
         // Only now may the listeners go.
         self.listener = None;
         self.retired_listeners.clear();
@@ -844,5 +891,60 @@ impl<'a> FrameView<'a> {
 
     pub(crate) fn raw(&self) -> &sys::f2s_frame_view {
         &self.raw
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_serial_can_be_open_only_once_at_a_time() {
+        let mut open = OpenSerials::default();
+        open.claim("111").expect("first open");
+        open.claim("222").expect("another device");
+        match open.claim("111") {
+            Err(Kinect2Error::AlreadyOpen { serial }) => assert_eq!(serial, "111"),
+            other => panic!("expected AlreadyOpen, got {other:?}"),
+        }
+        assert!(open.is_open("111") && open.is_open("222"));
+        open.release("111");
+        assert!(!open.is_open("111"));
+        open.claim("111").expect("open again after closing");
+        let message = Kinect2Error::AlreadyOpen {
+            serial: "111".into(),
+        }
+        .to_string();
+        assert!(message.contains("111") && message.contains("already open"));
+    }
+
+    /// The shim's own listener returns from a wait when nothing arrives
+    /// (libfreenect2's SyncMultiFrameListener, built without ENABLE_CXX11,
+    /// would block for good), and holds no frame afterwards.
+    #[test]
+    fn a_wait_without_frames_times_out() {
+        let listener =
+            Listener::new(Streams::DEPTH_AND_COLOR.frame_types(), "test").expect("listener");
+        for timeout_ms in [0, 1, 20] {
+            // SAFETY: the listener is alive and holds no frames.
+            let status = unsafe { sys::f2s_listener_wait(listener.handle.as_ptr(), timeout_ms) };
+            assert_eq!(status, sys::f2s_status::F2S_ERR_TIMEOUT);
+            let mut view = sys::f2s_frame_view::default();
+            // SAFETY: as above; `view` is writable.
+            let status = unsafe {
+                sys::f2s_listener_frame(
+                    listener.handle.as_ptr(),
+                    sys::f2s_frame_type::F2S_FRAME_DEPTH,
+                    &mut view,
+                )
+            };
+            assert_eq!(status, sys::f2s_status::F2S_ERR_NO_FRAME);
+        }
+    }
+
+    #[test]
+    fn a_context_tracks_nothing_open_at_first() {
+        let context = Context::new().expect("libfreenect2 context");
+        assert!(!context.is_open("012345678912"));
     }
 }

@@ -3,7 +3,9 @@
 //! usually names the USB cause (permissions, bandwidth, a lost device).
 
 use std::fmt;
+use std::ptr::NonNull;
 
+use super::log;
 use super::sys;
 
 /// A failed libfreenect2 call through the shim, as reported by the shim.
@@ -93,6 +95,16 @@ pub enum Kinect2Error {
     /// Images handed to the registration have the wrong size.
     #[error("registration needs {expected} but got {got}")]
     BadImageSize { expected: String, got: String },
+    /// The device is already open through this context (libfreenect2 would
+    /// hand out the same device twice).
+    #[error(
+        "Kinect v2 {serial} is already open in this process; close it (drop its Device) \
+         before opening it again"
+    )]
+    AlreadyOpen { serial: String },
+    /// Camera parameters that libfreenect2's registration cannot use safely.
+    #[error("invalid camera parameters: {0}")]
+    InvalidParams(String),
     /// A serial number with an interior NUL byte.
     #[error("invalid serial number {0:?}")]
     InvalidSerial(String),
@@ -111,4 +123,39 @@ fn list(items: &[String]) -> String {
     } else {
         items.join(", ")
     }
+}
+
+/// `Ok` for `F2S_OK`, else the failed `action` (on the device `serial`, if
+/// any) with the last problem libfreenect2 logged.
+pub(crate) fn check(
+    status: sys::f2s_status,
+    action: &'static str,
+    serial: Option<&str>,
+) -> Result<(), Kinect2Error> {
+    let status = ShimStatus::from_raw(status);
+    if status.is_ok() {
+        Ok(())
+    } else {
+        Err(Kinect2Error::Operation {
+            action,
+            serial: serial.map(str::to_string),
+            status,
+            libfreenect2_log: log::take_last_problem(),
+        })
+    }
+}
+
+/// The handle a shim constructor returned with `F2S_OK`; an error naming
+/// `action` should it be null all the same.
+pub(crate) fn non_null<T>(
+    raw: *mut T,
+    action: &'static str,
+    serial: Option<&str>,
+) -> Result<NonNull<T>, Kinect2Error> {
+    NonNull::new(raw).ok_or_else(|| Kinect2Error::Operation {
+        action,
+        serial: serial.map(str::to_string),
+        status: ShimStatus(sys::f2s_status::F2S_ERR_NULL_ARGUMENT.0),
+        libfreenect2_log: log::take_last_problem(),
+    })
 }

@@ -39,5 +39,5 @@ pub use device::{
 };
 pub use error::{Kinect2Error, ShimStatus};
 pub use log::LOG_TARGET;
-pub use registration::{Registration, DEPTH_PIXELS};
+pub use registration::{validate_params, Registration, DEPTH_PIXELS};
 pub use source::{CaptureStats, Kinect2Options, Kinect2Source};

@@ -15,8 +15,8 @@ use slope_ipc_types::{CloudSource, Mount};
 
 use super::convert::{unmirror_color, unmirror_depth, unmirrored_intrinsics, DEPTH_UNIT_M};
 use super::device::{
-    Context, DepthConfig, Device, DeviceSelector, FrameFormat, IrParams, Pipeline, Streams,
-    DEPTH_HEIGHT, DEPTH_WIDTH,
+    Context, DepthConfig, Device, DeviceSelector, FrameFormat, FrameView, IrParams, Pipeline,
+    Streams, COLOR_HEIGHT, COLOR_WIDTH, DEPTH_HEIGHT, DEPTH_WIDTH,
 };
 use super::error::Kinect2Error;
 use super::registration::{Registration, DEPTH_PIXELS};
@@ -108,6 +108,11 @@ pub struct Kinect2Source {
     stop: StopFlag,
     stats: CaptureStats,
     next_index: u64,
+    clock: DeviceClock,
+    /// When the last frame set arrived (spans reconnects).
+    last_frame_at: Option<Instant>,
+    /// The device was reopened since the last frame set.
+    reopened: bool,
     backoff: Duration,
     last_report: Instant,
     undistorted: Vec<f32>,
@@ -184,6 +189,9 @@ impl Kinect2Source {
                 ..CaptureStats::default()
             },
             next_index: 0,
+            clock: DeviceClock::default(),
+            last_frame_at: None,
+            reopened: false,
             last_report: Instant::now(),
             undistorted: vec![0.0; DEPTH_PIXELS],
             registered: vec![0; DEPTH_PIXELS],
@@ -220,10 +228,11 @@ impl Kinect2Source {
     }
 
     /// Tries to reopen the device after a loss, waiting the current backoff
-    /// first. Returns false if stopped.
-    fn reconnect(&mut self) -> bool {
+    /// first. Returns false if stopped; fails on errors that retrying
+    /// cannot cure (see [`is_retryable`]).
+    fn reconnect(&mut self) -> Result<bool, Kinect2Error> {
         if !self.stop.sleep(self.backoff) {
-            return false;
+            return Ok(false);
         }
         let selector = DeviceSelector::Serial(self.serial.clone());
         match start_device(&self.context, &self.options, &selector) {
@@ -236,6 +245,7 @@ impl Kinect2Source {
                     );
                 }
                 self.running = Some(running);
+                self.reopened = true;
                 self.stats.reconnects += 1;
                 self.backoff = self.options.min_backoff;
                 tracing::info!(
@@ -244,6 +254,7 @@ impl Kinect2Source {
                     "Kinect v2 reconnected"
                 );
             }
+            Err(err) if !is_retryable(&err) => return Err(err),
             Err(err) => {
                 self.stats.failed_opens += 1;
                 let next = (self.backoff * 2).min(self.options.max_backoff);
@@ -251,11 +262,12 @@ impl Kinect2Source {
                 self.backoff = next;
             }
         }
-        true
+        Ok(true)
     }
 
-    /// Converts the frame set in the running device into `frame`; `Ok(false)`
-    /// when the set must be skipped (counted).
+    /// Converts the frame set in the running device into `frame`:
+    /// `Ok(Some(true))` for a frame, `Ok(Some(false))` when the set is
+    /// skipped (counted), `Ok(None)` when none came within one wait slice.
     fn convert(&mut self, frame: &mut SourceFrame) -> Result<Option<bool>, Kinect2Error> {
         let Some(running) = self.running.as_mut() else {
             return Ok(None);
@@ -263,16 +275,23 @@ impl Kinect2Source {
         let Some(set) = running.device.wait_for_frames(WAIT_SLICE)? else {
             return Ok(None);
         };
-        running.last_frame = Instant::now();
+        let arrived_ns = slope_ipc_types::now_ns();
+        let arrived = Instant::now();
+        running.last_frame = arrived;
+        if std::mem::take(&mut self.reopened) {
+            // The reopened device's clock starts afresh: continue our time
+            // by the wall-clock gap since the last frame before the loss.
+            if let Some(before) = self.last_frame_at {
+                self.clock.restart(arrived.duration_since(before));
+            }
+        }
+        self.last_frame_at = Some(arrived);
+        // Indices count delivered frames only, so a gap downstream always
+        // means a cloud was lost there, not a frame the camera spoiled.
         let index = self.next_index;
-        self.next_index += 1;
         let Some(depth) = set.depth() else {
             self.stats.malformed += 1;
-            tracing::warn!(
-                serial = self.serial,
-                index,
-                "frame set without depth; skipped"
-            );
+            tracing::warn!(serial = self.serial, "frame set without depth; skipped");
             return Ok(Some(false));
         };
         let color = if self.options.color {
@@ -282,11 +301,7 @@ impl Kinect2Source {
         };
         if self.options.color && color.is_none() {
             self.stats.malformed += 1;
-            tracing::warn!(
-                serial = self.serial,
-                index,
-                "frame set without colour; skipped"
-            );
+            tracing::warn!(serial = self.serial, "frame set without colour; skipped");
             return Ok(Some(false));
         }
         let status = depth.status() | color.map_or(0, |c| c.status());
@@ -294,14 +309,31 @@ impl Kinect2Source {
             self.stats.bad_status += 1;
             tracing::debug!(
                 serial = self.serial,
-                index,
                 status,
                 "frame with non-zero status; skipped"
             );
             return Ok(Some(false));
         }
+        // A layout libfreenect2 does not document (e.g. colour still JPEG)
+        // will not go away by reconnecting: fail instead.
+        check_layout(
+            &self.serial,
+            &depth,
+            DEPTH_WIDTH,
+            DEPTH_HEIGHT,
+            "depth",
+            |f| f == FrameFormat::Float,
+        )?;
         let registered = match color {
             Some(color) => {
+                check_layout(
+                    &self.serial,
+                    &color,
+                    COLOR_WIDTH,
+                    COLOR_HEIGHT,
+                    "colour",
+                    |f| f == FrameFormat::Bgrx || f == FrameFormat::Rgbx,
+                )?;
                 running.registration.apply(
                     &color,
                     &depth,
@@ -321,25 +353,93 @@ impl Kinect2Source {
         let (width, height) = (self.info.width, self.info.height);
         unmirror_depth(&self.undistorted, width, height, &mut frame.depth);
         match registered {
-            Some(format) if format == FrameFormat::Bgrx || format == FrameFormat::Rgbx => {
+            Some(format) => {
                 let image = frame.color.get_or_insert_with(ColorImage::default);
                 unmirror_color(&self.registered, format, width, height, image);
-            }
-            Some(format) => {
-                return Err(Kinect2Error::UnexpectedFrame {
-                    serial: self.serial.clone(),
-                    what: format!("colour frame in format {format:?}, expected BGRX or RGBX"),
-                })
             }
             None => frame.color = None,
         }
         frame.index = index;
-        // Device clock: units of 0.125 ms.
-        frame.source_stamp_ns = u64::from(depth.timestamp()) * 125_000;
-        frame.capture_stamp_ns = slope_ipc_types::now_ns();
+        frame.source_stamp_ns = self.clock.stamp(depth.timestamp());
+        frame.capture_stamp_ns = arrived_ns;
         drop(set);
+        self.next_index = self.next_index.wrapping_add(1);
         self.stats.frames += 1;
         Ok(Some(true))
+    }
+}
+
+/// Fails unless `view` is `width x height` 4-byte pixels in a format `ok`
+/// accepts.
+fn check_layout(
+    serial: &str,
+    view: &FrameView<'_>,
+    width: usize,
+    height: usize,
+    what: &str,
+    ok: impl Fn(FrameFormat) -> bool,
+) -> Result<(), Kinect2Error> {
+    if view.width() == width
+        && view.height() == height
+        && view.bytes_per_pixel() == 4
+        && ok(view.format())
+    {
+        return Ok(());
+    }
+    Err(Kinect2Error::UnexpectedFrame {
+        serial: serial.to_string(),
+        what: format!(
+            "{what} frame of {} x {} x {} bytes in format {:?}, expected {width} x {height} x 4 \
+             (is libfreenect2's colour decoding built in?)",
+            view.width(),
+            view.height(),
+            view.bytes_per_pixel(),
+            view.format()
+        ),
+    })
+}
+
+/// Units of the device clock.
+const DEVICE_TICK_NS: u64 = 125_000;
+
+/// Turns the device's 32-bit clock (0.125 ms units; wraps after about 6.2
+/// days, restarts when the device does) into a 64-bit nanosecond time that
+/// never goes backwards.
+#[derive(Debug, Default)]
+pub(crate) struct DeviceClock {
+    /// The last raw stamp and the time it became.
+    last: Option<(u32, u64)>,
+    /// Set by [`DeviceClock::restart`]: the next stamp continues the time
+    /// by this gap, whatever the device's clock says.
+    restart_gap_ns: Option<u64>,
+}
+
+impl DeviceClock {
+    pub(crate) fn stamp(&mut self, raw: u32) -> u64 {
+        let ns = match (self.last, self.restart_gap_ns.take()) {
+            (None, _) => u64::from(raw) * DEVICE_TICK_NS,
+            (Some((_, last_ns)), Some(gap)) => last_ns.saturating_add(gap.max(1)),
+            (Some((last_raw, last_ns)), None) => {
+                // The forward distance modulo 2^32 ticks, so a wrap just
+                // continues; a "forward" jump of more than half the range
+                // is the clock going backwards (a reset): one tick on.
+                let ahead = raw.wrapping_sub(last_raw);
+                if ahead < 1 << 31 {
+                    last_ns.saturating_add(u64::from(ahead) * DEVICE_TICK_NS)
+                } else {
+                    tracing::warn!(raw, last_raw, "the Kinect v2 clock went backwards");
+                    last_ns.saturating_add(DEVICE_TICK_NS)
+                }
+            }
+        };
+        self.last = Some((raw, ns));
+        ns
+    }
+
+    /// The device was reopened (its clock restarts): the next stamp is the
+    /// last one plus `gap`.
+    pub(crate) fn restart(&mut self, gap: Duration) {
+        self.restart_gap_ns = Some(u64::try_from(gap.as_nanos()).unwrap_or(u64::MAX));
     }
 }
 
@@ -354,7 +454,7 @@ impl FrameSource for Kinect2Source {
                 return Ok(false);
             }
             if self.running.is_none() {
-                if !self.reconnect() {
+                if !self.reconnect()? {
                     return Ok(false);
                 }
                 continue;
@@ -393,7 +493,11 @@ impl FrameSource for Kinect2Source {
                         self.close();
                     }
                 }
-                Err(err @ Kinect2Error::UnexpectedFrame { .. }) => return Err(err.into()),
+                Err(
+                    err @ (Kinect2Error::UnexpectedFrame { .. }
+                    | Kinect2Error::BadImageSize { .. }
+                    | Kinect2Error::InvalidParams(_)),
+                ) => return Err(err.into()),
                 Err(err) => {
                     // A failing wait or registration: treat like a lost device.
                     self.stats.lost += 1;
@@ -450,4 +554,49 @@ fn start_device(
         registration,
         last_frame: Instant::now(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const TICK: u64 = DEVICE_TICK_NS;
+
+    #[test]
+    fn the_device_clock_runs_on_through_a_wrap() {
+        let mut clock = DeviceClock::default();
+        let start = u32::MAX - 266;
+        let first = clock.stamp(start);
+        assert_eq!(first, u64::from(start) * TICK);
+        // 266 ticks later the u32 has wrapped to 0; then 266 more.
+        assert_eq!(clock.stamp(u32::MAX), first + 266 * TICK);
+        assert_eq!(clock.stamp(266), first + 533 * TICK);
+        assert_eq!(clock.stamp(532), first + 799 * TICK);
+    }
+
+    #[test]
+    fn the_device_clock_never_goes_back() {
+        let mut clock = DeviceClock::default();
+        assert_eq!(clock.stamp(10_000), 10_000 * TICK);
+        // A reset without a reopen: one tick on, then onwards from there.
+        assert_eq!(clock.stamp(100), 10_001 * TICK);
+        assert_eq!(clock.stamp(366), 10_267 * TICK);
+        // A reopen: the gap in wall time, whatever the new clock says.
+        clock.restart(Duration::from_millis(1500));
+        let after = clock.stamp(5);
+        assert_eq!(after, 10_267 * TICK + 1_500_000_000);
+        assert_eq!(clock.stamp(271), after + 266 * TICK);
+    }
+
+    #[test]
+    fn only_lasting_errors_end_the_stream() {
+        assert!(is_retryable(&Kinect2Error::SerialNotFound {
+            serial: "1".into(),
+            connected: Vec::new(),
+        }));
+        assert!(!is_retryable(&Kinect2Error::InvalidParams("x".into())));
+        assert!(!is_retryable(&Kinect2Error::AlreadyOpen {
+            serial: "1".into()
+        }));
+    }
 }

@@ -96,3 +96,36 @@ fn pixel_count(width: u32, height: u32) -> usize {
 fn pixel_index(width: u32, height: u32, u: u32, v: u32) -> Option<usize> {
     (u < width && v < height).then(|| v as usize * width as usize + u as usize)
 }
+
+/// A depth in metres as a raw depth count of a recording with `unit_m`
+/// metres per count: `round(depth_m / unit_m)`, or 0 (no reading) for
+/// anything that is not a count in 1..=65535 (NaN, zero or negative, or
+/// beyond the 16-bit range). Every writer of depth counts (the simulator,
+/// the recorder) uses this one rule.
+pub fn metres_to_count(depth_m: f64, unit_m: f64) -> u16 {
+    let count = (depth_m / unit_m).round();
+    if (1.0..=f64::from(u16::MAX)).contains(&count) {
+        // A whole number in 1..=65535 after the check: the cast is exact.
+        count as u16
+    } else {
+        0
+    }
+}
+
+#[cfg(test)]
+mod count_tests {
+    use super::metres_to_count;
+
+    #[test]
+    fn counts_round_to_nearest_and_out_of_range_is_no_reading() {
+        assert_eq!(metres_to_count(1.2344, 0.001), 1234);
+        assert_eq!(metres_to_count(1.2346, 0.001), 1235);
+        assert_eq!(metres_to_count(0.0004, 0.001), 0);
+        assert_eq!(metres_to_count(-1.0, 0.001), 0);
+        assert_eq!(metres_to_count(f64::NAN, 0.001), 0);
+        assert_eq!(metres_to_count(f64::INFINITY, 0.001), 0);
+        assert_eq!(metres_to_count(65.535, 0.001), 65535);
+        assert_eq!(metres_to_count(65.6, 0.001), 0);
+        assert_eq!(metres_to_count(1.0, 0.0002), 5000);
+    }
+}

@@ -18,6 +18,7 @@ use slope_sensor::publish::{publish_stream, Pacing, PublishOptions, PublishStats
 use slope_sensor::source::FrameSource;
 
 use crate::cli::{node_name, CommonArgs};
+use crate::mount_args::{check_mount, MountArgs};
 use crate::replay::positive_f64;
 
 #[derive(Debug, Parser)]
@@ -101,17 +102,9 @@ pub struct CaptureArgs {
     #[arg(long)]
     pub depth_only: bool,
 
-    /// Camera height above the ground, metres (sent with every cloud).
-    #[arg(long)]
-    pub mount_height_m: Option<f64>,
-
-    /// Camera pitch, degrees; negative looks down.
-    #[arg(long, allow_hyphen_values = true)]
-    pub mount_pitch_deg: Option<f64>,
-
-    /// Camera roll about the optical axis, degrees; positive dips the image's right side.
-    #[arg(long, allow_hyphen_values = true)]
-    pub mount_roll_deg: Option<f64>,
+    /// The camera's pose on the robot, sent with every cloud.
+    #[command(flatten)]
+    pub mount: MountArgs,
 
     /// Keep retrying (with backoff) until a Kinect v2 appears, instead of
     /// failing at once.
@@ -123,8 +116,8 @@ pub struct CaptureArgs {
     #[arg(long, value_parser = positive_f64)]
     pub frame_timeout_s: Option<f64>,
 
-    /// Stop after this many frames.
-    #[arg(long)]
+    /// Stop after this many frames (at least 1).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     pub max_frames: Option<u64>,
 
     /// Largest cloud (width x height) to accept.
@@ -218,7 +211,10 @@ pub fn resolve_options(
             .or(file.edge_aware_filter)
             .unwrap_or(defaults.edge_aware_filter),
     };
-    if !(depth.min_depth_m > 0.0 && depth.max_depth_m > depth.min_depth_m) {
+    if !(depth.min_depth_m > 0.0
+        && depth.max_depth_m.is_finite()
+        && depth.max_depth_m > depth.min_depth_m)
+    {
         anyhow::bail!(
             "the depth range {} m .. {} m is empty; min_depth_m must be positive and below max_depth_m",
             depth.min_depth_m,
@@ -231,20 +227,14 @@ pub fn resolve_options(
             "frame_timeout_s must be a positive number of seconds, not {frame_timeout_s}"
         );
     }
-    let mount = Mount {
-        height_m: args
-            .mount_height_m
-            .or(config.mount.height_m)
-            .unwrap_or(f64::NAN),
-        pitch_deg: args
-            .mount_pitch_deg
-            .or(config.mount.pitch_deg)
-            .unwrap_or(f64::NAN),
-        roll_deg: args
-            .mount_roll_deg
-            .or(config.mount.roll_deg)
-            .unwrap_or(f64::NAN),
+    let file_mount = Mount {
+        height_m: config.mount.height_m.unwrap_or(f64::NAN),
+        pitch_deg: config.mount.pitch_deg.unwrap_or(f64::NAN),
+        roll_deg: config.mount.roll_deg.unwrap_or(f64::NAN),
     };
+    check_mount(&file_mount)
+        .map_err(|message| anyhow::anyhow!("in the config file's [mount]: {message}"))?;
+    let mount = args.mount.over(file_mount);
     Ok(Kinect2Options {
         device,
         pipeline,
@@ -404,6 +394,19 @@ mod tests {
         assert!(toml::from_str::<CaptureConfig>("[kinect2]\nserail = \"1\"\n").is_err());
         let empty_range = parse(&["--min-depth-m", "3", "--max-depth-m", "2"]);
         assert!(resolve_options(&empty_range, &CaptureConfig::default()).is_err());
+        let endless: CaptureConfig =
+            toml::from_str("[kinect2]\nmax_depth_m = inf\n").expect("config");
+        assert!(resolve_options(&parse(&[]), &endless).is_err());
+        let upside_down: CaptureConfig =
+            toml::from_str("[mount]\npitch_deg = 400.0\n").expect("config");
+        let message = resolve_options(&parse(&[]), &upside_down)
+            .expect_err("pitch 400")
+            .to_string();
+        assert!(
+            message.contains("[mount]") && message.contains("pitch"),
+            "{message}"
+        );
+        assert!(CaptureArgs::try_parse_from(["slope-capture", "--mount-height-m", "-1"]).is_err());
         assert!(CaptureArgs::try_parse_from([
             "slope-capture",
             "--serial",

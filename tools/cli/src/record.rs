@@ -10,7 +10,7 @@
 //! projected from whole-millimetre depth, this gives back the source's depth
 //! to the millimetre.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use anyhow::Context;
@@ -25,7 +25,15 @@ use slope_sensor::recording::{
 use slope_sensor::source::{FrameSource, SourceFrame, SourceInfo};
 
 use crate::cli::{node_name, CommonArgs};
+use crate::mount_args::MountArgs;
 use crate::replay::positive_f64;
+
+/// The Kinect's depth pipeline, parsed when the arguments are (a plain name
+/// in a build without the Kinect, which then refuses `--source kinect`).
+#[cfg(feature = "kinect2")]
+pub type PipelineArg = slope_sensor::kinect2::Pipeline;
+#[cfg(not(feature = "kinect2"))]
+pub type PipelineArg = String;
 
 /// Metres per depth count of recordings written from the topic.
 pub const TOPIC_DEPTH_UNIT_M: f64 = 0.001;
@@ -81,8 +89,8 @@ pub struct RecordArgs {
     #[arg(long, value_enum, default_value_t = RecordSource::Topic)]
     pub source: RecordSource,
 
-    /// Stop after this many frames.
-    #[arg(long)]
+    /// Stop after this many frames (at least 1).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     pub max_frames: Option<u64>,
 
     /// Stop after this many seconds from the first frame.
@@ -99,18 +107,10 @@ pub struct RecordArgs {
     #[arg(long, value_parser = positive_f64)]
     pub idle_timeout_s: Option<f64>,
 
-    /// Camera height above the ground, metres, for recording.toml's
-    /// [mount] (topic: overrides the header's).
-    #[arg(long)]
-    pub mount_height_m: Option<f64>,
-
-    /// Camera pitch, degrees; negative looks down.
-    #[arg(long, allow_hyphen_values = true)]
-    pub mount_pitch_deg: Option<f64>,
-
-    /// Camera roll about the optical axis, degrees.
-    #[arg(long, allow_hyphen_values = true)]
-    pub mount_roll_deg: Option<f64>,
+    /// The camera's pose for recording.toml's [mount] (topic: overrides
+    /// the header's).
+    #[command(flatten)]
+    pub mount: MountArgs,
 
     /// PNG compression: fast for a busy robot, high for archiving.
     #[arg(long, value_enum, default_value_t = Compression::Fast)]
@@ -122,7 +122,7 @@ pub struct RecordArgs {
 
     /// Kinect: depth pipeline (default, cpu, cl, clkde, cuda, cudakde, gl).
     #[arg(long)]
-    pub pipeline: Option<String>,
+    pub pipeline: Option<PipelineArg>,
 
     /// Kinect: record depth only.
     #[arg(long)]
@@ -164,15 +164,6 @@ pub struct RecordStats {
     pub stopped: bool,
 }
 
-/// A mount with the command line's values over `base`.
-fn override_mount(base: Mount, args: &RecordArgs) -> Mount {
-    Mount {
-        height_m: args.mount_height_m.unwrap_or(base.height_m),
-        pitch_deg: args.mount_pitch_deg.unwrap_or(base.pitch_deg),
-        roll_deg: args.mount_roll_deg.unwrap_or(base.roll_deg),
-    }
-}
-
 fn mount_info(mount: &Mount) -> MountInfo {
     let known = |v: f64| v.is_finite().then_some(v);
     MountInfo {
@@ -200,16 +191,12 @@ pub fn meta_for(info: &SourceInfo, sensor: &str) -> RecordingMeta {
     }
 }
 
-/// A cloud's depth in whole counts of `unit_m`: `round(z_m / unit_m)`,
-/// 0 for an invalid point, saturating at the u16 range.
+/// A cloud's depth in whole counts of `unit_m`: `round(z_m / unit_m)`;
+/// 0 (no reading) for an invalid point and for depth that does not fit in
+/// a u16 count, never a bogus saturated value.
 #[inline]
 pub fn depth_count(point: &CloudPoint, unit_m: f64) -> u16 {
-    if !point.is_valid() || point.z_m <= 0.0 {
-        return 0;
-    }
-    let count = (f64::from(point.z_m) / unit_m).round();
-    // `as` saturates; the value is finite and positive here.
-    count as u16
+    slope_sensor::recording::metres_to_count(f64::from(point.z_m), unit_m)
 }
 
 /// Rebuilds the depth (and colour) images of a received cloud.
@@ -240,32 +227,76 @@ pub fn cloud_to_images(
     }
 }
 
-/// Keeps recording timestamps non-decreasing (a device clock may wrap).
+/// Recording timestamps from a source's stamps: starting at 0 and
+/// following the source, but never going backwards. When the source's
+/// clock jumps back (a restarted device, a looped replay), the timeline is
+/// rebased: that frame comes one previous frame interval after the last,
+/// and later frames follow the source from there. So stamps neither freeze
+/// nor repeat, and a replay keeps the original pace.
 struct Timeline {
-    first_ns: Option<u64>,
-    last_ns: u64,
+    /// The last source stamp and the timestamp it became.
+    last: Option<(u64, u64)>,
+    /// The last forward step, used across a jump back.
+    step_ns: u64,
 }
 
 impl Timeline {
     fn new() -> Self {
         Self {
-            first_ns: None,
-            last_ns: 0,
+            last: None,
+            step_ns: 1,
         }
     }
 
     fn stamp(&mut self, source_stamp_ns: u64) -> u64 {
-        let first = *self.first_ns.get_or_insert(source_stamp_ns);
-        let relative = source_stamp_ns.saturating_sub(first);
-        if relative < self.last_ns {
-            tracing::warn!(
-                relative_ns = relative,
-                previous_ns = self.last_ns,
-                "source clock went backwards; keeping timestamps non-decreasing"
-            );
+        let out = match self.last {
+            None => 0,
+            Some((last_source, last_out)) if source_stamp_ns >= last_source => {
+                let step = source_stamp_ns - last_source;
+                if step > 0 {
+                    self.step_ns = step;
+                }
+                last_out.saturating_add(step)
+            }
+            Some((last_source, last_out)) => {
+                tracing::warn!(
+                    source_ns = source_stamp_ns,
+                    previous_ns = last_source,
+                    "source clock went backwards; continuing the recording's time"
+                );
+                last_out.saturating_add(self.step_ns)
+            }
+        };
+        self.last = Some((source_stamp_ns, out));
+        out
+    }
+}
+
+/// Makes sure `dir` can take a new recording before anything is waited
+/// for: an empty directory, or one that does not exist yet (then created).
+/// Returns whether it was created.
+pub fn prepare_out_dir(dir: &Path) -> anyhow::Result<bool> {
+    match std::fs::read_dir(dir) {
+        Ok(mut entries) => {
+            if entries.next().is_some() {
+                anyhow::bail!(
+                    "the output directory {} is not empty; give a new or empty directory",
+                    dir.display()
+                );
+            }
+            Ok(false)
         }
-        self.last_ns = self.last_ns.max(relative);
-        self.last_ns
+        Err(err) if err.kind() == std::io::ErrorKind::NotFound => {
+            std::fs::create_dir_all(dir)
+                .with_context(|| format!("cannot create the output directory {}", dir.display()))?;
+            Ok(true)
+        }
+        Err(err) => Err(err).with_context(|| {
+            format!(
+                "cannot use {} as the output directory (is it a file, or unreadable?)",
+                dir.display()
+            )
+        }),
     }
 }
 
@@ -369,9 +400,9 @@ pub fn record_topic(
             let header = *sample.header();
             let points = sample.points();
             last_at = Instant::now();
-            if let Some(last) = last_index {
-                if header.frame_index > last + 1 {
-                    let missed = header.frame_index - last - 1;
+            if let Some(expected) = last_index.and_then(|last| last.checked_add(1)) {
+                if header.frame_index > expected {
+                    let missed = header.frame_index - expected;
                     stats.missed += missed;
                     tracing::warn!(
                         missed,
@@ -397,7 +428,7 @@ pub fn record_topic(
                         height: header.height,
                         intrinsics: header.intrinsics,
                         unit_m: TOPIC_DEPTH_UNIT_M,
-                        mount: override_mount(header.mount, args),
+                        mount: args.mount.over(header.mount),
                         source: CloudSource::from_raw(header.source).unwrap_or(CloudSource::Replay),
                         has_color: header.has_color != 0,
                     };
@@ -467,19 +498,15 @@ fn record_kinect(
     limits: &RecordLimits,
     stop: &StopFlag,
 ) -> anyhow::Result<RecordStats> {
-    use slope_sensor::kinect2::{DeviceSelector, Kinect2Options, Kinect2Source, Pipeline};
-    let pipeline = match &args.pipeline {
-        Some(name) => name.parse::<Pipeline>()?,
-        None => Pipeline::Default,
-    };
+    use slope_sensor::kinect2::{DeviceSelector, Kinect2Options, Kinect2Source};
     let options = Kinect2Options {
         device: args
             .serial
             .clone()
             .map_or(DeviceSelector::First, DeviceSelector::Serial),
-        pipeline,
+        pipeline: args.pipeline.unwrap_or_default(),
         color: !args.depth_only,
-        mount: override_mount(Mount::UNKNOWN, args),
+        mount: args.mount.over(Mount::UNKNOWN),
         ..Kinect2Options::default()
     };
     let Some(mut source) =
@@ -515,10 +542,22 @@ fn record_kinect(_: &RecordArgs, _: &RecordLimits, _: &StopFlag) -> anyhow::Resu
 
 pub fn run(args: &RecordArgs, stop: &StopFlag) -> anyhow::Result<RecordStats> {
     let limits = RecordLimits::from_args(args);
-    let stats = match args.source {
-        RecordSource::Topic => record_topic(args, &limits, stop)?,
-        RecordSource::Kinect => record_kinect(args, &limits, stop)?,
+    if args.source == RecordSource::Kinect && cfg!(not(feature = "kinect2")) {
+        // Say so before touching the output directory.
+        return record_kinect(args, &limits, stop);
+    }
+    let created = prepare_out_dir(&args.out_dir)?;
+    let result = match args.source {
+        RecordSource::Topic => record_topic(args, &limits, stop),
+        RecordSource::Kinect => record_kinect(args, &limits, stop),
     };
+    if created && is_empty_dir(&args.out_dir) {
+        // Nothing was recorded into the directory we made: leave no trace.
+        if let Err(err) = std::fs::remove_dir(&args.out_dir) {
+            tracing::debug!(error = %err, "could not remove the empty output directory");
+        }
+    }
+    let stats = result?;
     tracing::info!(
         written = stats.written,
         missed = stats.missed,
@@ -528,6 +567,10 @@ pub fn run(args: &RecordArgs, stop: &StopFlag) -> anyhow::Result<RecordStats> {
         "recording finished"
     );
     Ok(stats)
+}
+
+fn is_empty_dir(dir: &Path) -> bool {
+    std::fs::read_dir(dir).is_ok_and(|mut entries| entries.next().is_none())
 }
 
 #[cfg(test)]
@@ -617,11 +660,61 @@ mod tests {
     }
 
     #[test]
-    fn timestamps_start_at_zero_and_never_decrease() {
+    fn timestamps_start_at_zero_and_continue_across_a_jump_back() {
         let mut timeline = Timeline::new();
         assert_eq!(timeline.stamp(1_000), 0);
         assert_eq!(timeline.stamp(34_000), 33_000);
-        assert_eq!(timeline.stamp(20_000), 33_000);
-        assert_eq!(timeline.stamp(70_000), 69_000);
+        // Back in time: one previous interval on, not frozen.
+        assert_eq!(timeline.stamp(20_000), 66_000);
+        // Then following the source again from there.
+        assert_eq!(timeline.stamp(70_000), 116_000);
+        assert_eq!(timeline.stamp(70_000), 116_000);
+        assert_eq!(timeline.stamp(u64::MAX), u64::MAX);
+        assert_eq!(timeline.stamp(0), u64::MAX);
+    }
+
+    #[test]
+    fn depth_that_a_count_cannot_hold_is_no_reading() {
+        let at = |z_m: f32| CloudPoint {
+            x_m: 0.0,
+            y_m: 0.0,
+            z_m,
+            rgb: 0,
+        };
+        assert_eq!(depth_count(&at(1.2344), 0.001), 1234);
+        assert_eq!(depth_count(&at(65.535), 0.001), 65_535);
+        assert_eq!(depth_count(&at(65.6), 0.001), 0);
+        assert_eq!(depth_count(&at(1e30), 0.001), 0);
+        assert_eq!(depth_count(&at(-1.0), 0.001), 0);
+        assert_eq!(depth_count(&at(0.0004), 0.001), 0);
+        assert_eq!(depth_count(&CloudPoint::INVALID, 0.001), 0);
+    }
+
+    #[test]
+    fn the_output_directory_is_checked_before_waiting() {
+        let tmp = tempfile::tempdir().expect("tempdir");
+        let fresh = tmp.path().join("a/b");
+        assert!(prepare_out_dir(&fresh).expect("created"));
+        assert!(fresh.is_dir());
+        assert!(!prepare_out_dir(&fresh).expect("empty is fine"));
+        std::fs::write(fresh.join("x"), b"x").expect("file");
+        let message = prepare_out_dir(&fresh).expect_err("not empty").to_string();
+        assert!(message.contains("not empty"), "{message}");
+        assert!(prepare_out_dir(&fresh.join("x")).is_err());
+    }
+
+    #[test]
+    fn zero_frames_is_refused_and_the_pipeline_is_parsed_early() {
+        let parse = |args: &[&str]| {
+            RecordArgs::try_parse_from(std::iter::once("slope-record").chain(args.iter().copied()))
+        };
+        assert!(parse(&["out", "--max-frames", "0"]).is_err());
+        assert!(parse(&["out", "--max-frames", "1"]).is_ok());
+        #[cfg(feature = "kinect2")]
+        {
+            assert!(parse(&["out", "--pipeline", "vulkan"]).is_err());
+            let args = parse(&["out", "--pipeline", "cpu"]).expect("args");
+            assert_eq!(args.pipeline, Some(slope_sensor::kinect2::Pipeline::Cpu));
+        }
     }
 }

@@ -128,13 +128,7 @@ fn measure<R: Rng + ?Sized>(
 /// Depth in metres to recording counts: rounded to the nearest
 /// [`DEPTH_UNIT_M`]; 0 (no reading) when not representable in 16 bits.
 pub fn quantise(z_m: f64) -> u16 {
-    let counts = (z_m / DEPTH_UNIT_M).round();
-    if counts >= 1.0 && counts <= f64::from(u16::MAX) {
-        // In [1, 65535] after the check, so the cast is exact.
-        counts as u16
-    } else {
-        0
-    }
+    slope_sensor::recording::metres_to_count(z_m, DEPTH_UNIT_M)
 }
 
 /// For each pixel at a depth discontinuity, the depth on the other side:
