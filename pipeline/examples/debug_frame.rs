@@ -108,9 +108,9 @@ fn main() {
     let sel = select_planes(&summaries, up, &config.selection);
     println!("selection: {sel:?}");
     let Ok(sel) = sel else { return };
-    let mut chosen = vec![("inclined", sel.inclined, Band::Middle)];
+    let mut chosen = vec![("inclined", sel.inclined, Band::Spread)];
     if let GroundSource::Plane(g) = sel.ground {
-        chosen.push(("ground", g, Band::Lower));
+        chosen.push(("ground", g, Band::Spread));
     }
     let mut means = Vec::new();
     for (name, idx, band) in chosen {
@@ -123,7 +123,13 @@ fn main() {
         );
         let members = members.to_vec();
         let mut ne = NormalEstimator::new();
-        let (normals, nstats) = ne.estimate(&view, &members, &config.normals, &Vector3::zeros());
+        let (normals, nstats) = ne.estimate_with_support(
+            &view,
+            &members,
+            &planes[idx].inliers,
+            &config.normals,
+            &Vector3::zeros(),
+        );
         let normals = normals.to_vec();
         let mut km = CosineKmeans::new();
         let c = km
@@ -145,6 +151,19 @@ fn main() {
             angle_between_deg(&kept, &planes[idx].plane.normal),
             angle_between_deg(&all, &planes[idx].plane.normal),
         );
+        let mut bm = slope_pipeline::plane_fit::Moments::new();
+        for &i in &members {
+            if let Some(p) = view.point(i as usize) {
+                bm.add(&p);
+            }
+        }
+        if let Some(bp) = slope_pipeline::plane_fit::fit_tls(&bm) {
+            println!(
+                "   band-tls vs plane-tls {:.3} deg, kept-mean vs band-tls {:.3}",
+                angle_between_deg(&bp.normal, &planes[idx].plane.normal),
+                angle_between_deg(&kept, &bp.normal)
+            );
+        }
         means.push((kept, planes[idx].plane.normal));
     }
     if means.len() == 2 {

@@ -196,10 +196,10 @@ impl Default for NormalsConfig {
     fn default() -> Self {
         Self {
             neighbours: 100,
-            max_window_radius_px: 12,
-            ray_noise_correction: true,
+            max_window_radius_px: 40,
+            ray_noise_correction: false,
             interior_only: true,
-            min_patch_radius_m: 0.0,
+            min_patch_radius_m: 0.1,
         }
     }
 }

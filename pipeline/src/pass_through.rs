@@ -48,6 +48,10 @@ pub enum Band {
     /// (the ground: nearer the robot and away from the junction with the
     /// plane ahead, without reaching the image's bottom edge).
     Lower,
+    /// A uniform subsample of the whole plane (every `n / max_points`-th
+    /// point in pixel order), for normals whose neighbourhoods come from the
+    /// whole plane ([`crate::normals::NormalEstimator::estimate_with_support`]).
+    Spread,
 }
 
 /// Reusable buffers of the filter.
@@ -86,10 +90,20 @@ impl PassThrough {
             let by_depth = |a: &(f32, u32), b: &(f32, u32)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1));
             if max_points == 0 {
                 self.keyed.clear();
+            } else if band == Band::Spread {
+                // Every (n / max_points)-th member in pixel order: a uniform
+                // subsample of the whole plane.
+                let n = self.keyed.len();
+                self.keyed.sort_unstable_by_key(|&(_, i)| i);
+                for k in 0..max_points {
+                    self.keyed[k] = self.keyed[k * n / max_points];
+                }
+                self.keyed.truncate(max_points);
             } else {
                 let lo = match band {
                     Band::Middle => (self.keyed.len() - max_points) / 2,
                     Band::Lower => (self.keyed.len() - max_points) * 3 / 4,
+                    Band::Spread => 0,
                 };
                 if lo > 0 {
                     self.keyed.select_nth_unstable_by(lo, by_depth);
@@ -173,6 +187,12 @@ mod tests {
         let mut want_bottom: Vec<u32> = sorted[52..82].iter().map(|x| x.1).collect();
         want_bottom.sort_unstable();
         assert_eq!(bottom, &want_bottom[..]);
+        // The spread: every (100 / 30)-th member in pixel order.
+        let mut pt4 = PassThrough::new();
+        let (spread, range) = pt4.filter(&pts, &members, 30, Band::Spread);
+        let want_spread: Vec<u32> = (0..30).map(|k| k * 100 / 30).collect();
+        assert_eq!(spread, &want_spread[..]);
+        assert!(range.cut);
     }
 
     #[test]

@@ -37,6 +37,16 @@ const SCORE_POINTS: usize = 2000;
 /// Points of the score subset a hypothesis is first tested on.
 const PRETEST: usize = 100;
 
+/// Stride of the scrambled visiting order of the score subset; coprime with
+/// `SCORE_POINTS`, near its golden section.
+const SCRAMBLE: usize = 1237;
+
+/// Local-optimisation refits of a new best hypothesis, at most.
+const LO_STEPS: usize = 4;
+
+/// Hypotheses drawn per plane at least, whatever the adaptive count says.
+const MIN_HYPOTHESES: usize = 64;
+
 /// One segmented plane.
 #[derive(Debug, Clone)]
 pub struct SegmentedPlane {
@@ -145,29 +155,43 @@ impl PlaneSegmenter {
                 }
             }
             // Inliers from every free point, then only the largest
-            // 8-connected region of them on the pixel grid.
-            self.inlier_flags.clear();
-            for q in &self.free_xyz {
-                let p = Vector3::new(f64::from(q[0]), f64::from(q[1]), f64::from(q[2]));
-                self.inlier_flags
-                    .push(plane.signed_distance(&p).abs() <= t.at(&p));
-            }
-            self.keep_largest_region(w, h);
+            // 8-connected region of them on the pixel grid; the region's TLS
+            // plane collects the inliers once more (it is the better plane:
+            // fitted on every point, without the other regions' pull).
             let mut inliers = Vec::new();
             let mut moments = Moments::new();
-            for ((&i, q), &inside) in self
-                .free_index
-                .iter()
-                .zip(&self.free_xyz)
-                .zip(&self.inlier_flags)
-            {
-                if inside {
-                    inliers.push(i);
-                    moments.add(&Vector3::new(
-                        f64::from(q[0]),
-                        f64::from(q[1]),
-                        f64::from(q[2]),
-                    ));
+            for round in 0..2 {
+                self.inlier_flags.clear();
+                for q in &self.free_xyz {
+                    let p = Vector3::new(f64::from(q[0]), f64::from(q[1]), f64::from(q[2]));
+                    self.inlier_flags
+                        .push(plane.signed_distance(&p).abs() <= t.at(&p));
+                }
+                self.keep_largest_region(w, h);
+                inliers.clear();
+                moments = Moments::new();
+                for ((&i, q), &inside) in self
+                    .free_index
+                    .iter()
+                    .zip(&self.free_xyz)
+                    .zip(&self.inlier_flags)
+                {
+                    if inside {
+                        inliers.push(i);
+                        moments.add(&Vector3::new(
+                            f64::from(q[0]),
+                            f64::from(q[1]),
+                            f64::from(q[2]),
+                        ));
+                    }
+                }
+                if round == 0 && inliers.len() >= config.min_plane_points {
+                    match fit_tls(&moments) {
+                        Some(refit) => plane = refit,
+                        None => break,
+                    }
+                } else {
+                    break;
                 }
             }
             if inliers.len() < config.min_plane_points {
@@ -346,9 +370,15 @@ impl PlaneSegmenter {
         if n <= SCORE_POINTS {
             self.score_subset.extend(0..n as u32);
         } else {
-            for _ in 0..SCORE_POINTS {
-                self.score_subset.push(rng.random_range(0..n) as u32);
-            }
+            // A stratified subset: every (n / SCORE_POINTS)-th sample point
+            // in raster order, so each image region is scored in proportion,
+            // visited in a scrambled order (a stride coprime with
+            // SCORE_POINTS) so that the pretest prefix is spread over the
+            // whole image too.
+            self.score_subset.extend(
+                (0..SCORE_POINTS)
+                    .map(|k| ((k * SCRAMBLE) % SCORE_POINTS * n / SCORE_POINTS) as u32),
+            );
         }
         let t = Threshold {
             base_m: config.distance_threshold_m,
@@ -359,29 +389,43 @@ impl PlaneSegmenter {
         let mut it = 0;
         let log_fail = (1.0 - config.confidence).ln();
         let pool = &self.sample_with_normal;
-        while it < needed.min(config.max_iterations) {
+        while it < needed.max(MIN_HYPOTHESES).min(config.max_iterations) {
             it += 1;
             let a = pool[rng.random_range(0..pool.len())] as usize;
-            let b = pool[rng.random_range(0..pool.len())] as usize;
-            let c = pool[rng.random_range(0..pool.len())] as usize;
-            if a == b || b == c || a == c {
-                continue;
-            }
-            let Some(plane) = Plane::from_three_points(
-                &self.sample_xyz[a],
-                &self.sample_xyz[b],
-                &self.sample_xyz[c],
-            ) else {
-                continue;
-            };
-            if let Some(cg) = cos_gate {
-                if [a, b, c]
-                    .iter()
-                    .any(|&k| self.sample_normal[k].dot(&plane.normal).abs() < cg)
-                {
+            let plane = if cos_gate.is_some() && it % 2 == 1 {
+                // Every other hypothesis is one point and its coarse normal:
+                // a small plane (a stair riser among several parallel ones)
+                // is hit with the probability of its share w of the points,
+                // not w^3; local optimisation corrects the coarse normal.
+                let Some(plane) =
+                    Plane::from_point_normal(&self.sample_xyz[a], &self.sample_normal[a])
+                else {
+                    continue;
+                };
+                plane
+            } else {
+                let b = pool[rng.random_range(0..pool.len())] as usize;
+                let c = pool[rng.random_range(0..pool.len())] as usize;
+                if a == b || b == c || a == c {
                     continue;
                 }
-            }
+                let Some(plane) = Plane::from_three_points(
+                    &self.sample_xyz[a],
+                    &self.sample_xyz[b],
+                    &self.sample_xyz[c],
+                ) else {
+                    continue;
+                };
+                if let Some(cg) = cos_gate {
+                    if [a, b, c]
+                        .iter()
+                        .any(|&k| self.sample_normal[k].dot(&plane.normal).abs() < cg)
+                    {
+                        continue;
+                    }
+                }
+                plane
+            };
             // Preemptive test: a hypothesis that scores under half the best
             // rate on the first PRETEST points is not scored further.
             let inlier = |k: &u32| {
@@ -411,9 +455,27 @@ impl PlaneSegmenter {
                     .filter(|k| inlier(k))
                     .count();
             if best.as_ref().is_none_or(|(s, _)| score > *s) {
+                // Local optimisation (LO-RANSAC): refit the new best by TLS
+                // on its inliers until the score stops growing, so that
+                // whichever triple found the plane, the plane kept is the
+                // same fixed point of "fit the inliers, collect the inliers".
+                let (score, plane) = local_optimisation(
+                    score,
+                    plane,
+                    &self.sample_xyz,
+                    &self.sample_normal,
+                    &self.score_subset,
+                    t,
+                    cos_gate,
+                );
                 best = Some((score, plane));
                 let w = score as f64 / self.score_subset.len() as f64;
-                let p_good = w * w * w;
+                // Half the hypotheses need one good point, half three.
+                let p_good = if cos_gate.is_some() {
+                    0.5 * (w + w * w * w)
+                } else {
+                    w * w * w
+                };
                 if p_good > 0.0 && p_good < 1.0 {
                     let n_req = log_fail / (1.0 - p_good).ln();
                     needed = if n_req.is_finite() {
@@ -499,6 +561,41 @@ impl Threshold {
     fn at(&self, p: &Vector3<f64>) -> f64 {
         self.base_m.max(self.per_m2 * p.z * p.z)
     }
+}
+
+/// Refits `plane` by TLS on its inliers among `subset` and rescores it,
+/// while the inlier count grows (at most `LO_STEPS` times).
+fn local_optimisation(
+    score: usize,
+    plane: Plane,
+    xyz: &[Vector3<f64>],
+    normals: &[Vector3<f64>],
+    subset: &[u32],
+    t: Threshold,
+    cos_gate: Option<f64>,
+) -> (usize, Plane) {
+    let mut best = (score, plane);
+    for _ in 0..LO_STEPS {
+        let mut m = Moments::new();
+        for &k in subset {
+            let k = k as usize;
+            if is_inlier(&best.1, &xyz[k], &normals[k], t, cos_gate) {
+                m.add(&xyz[k]);
+            }
+        }
+        let Some(refit) = fit_tls(&m) else {
+            break;
+        };
+        let count = subset
+            .iter()
+            .filter(|&&k| is_inlier(&refit, &xyz[k as usize], &normals[k as usize], t, cos_gate))
+            .count();
+        if count <= best.0 {
+            break;
+        }
+        best = (count, refit);
+    }
+    best
 }
 
 #[inline]
