@@ -153,12 +153,11 @@ impl CosineKmeans {
             }
         }
         let spread_deg = (sum_sq / count.max(1) as f64).sqrt();
+        let merge_deg = merge_spread_ratio * spread_deg;
         let kept = (0..k)
             .filter(|&j| {
                 j == dominant
-                    || (counts[j] > 0
-                        && angle_between_deg(&centres[j], &centre)
-                            <= merge_spread_ratio * spread_deg)
+                    || (counts[j] > 0 && angle_between_deg(&centres[j], &centre) <= merge_deg)
             })
             .collect();
         Some(Clustering {

@@ -181,14 +181,6 @@ impl NormalEstimator {
                     found = Some(m);
                     // 0: the first window sufficed (an interior point).
                     self.radius[slot] = (r - r_start) as u16;
-                    let area = ((2 * r + 1) * (2 * r + 1)) as f64;
-                    let need: f64 = std::env::var("P2I")
-                        .ok()
-                        .and_then(|s| s.parse().ok())
-                        .unwrap_or(0.0);
-                    if r == r_start && count < need * area {
-                        self.radius[slot] = 1;
-                    }
                     break;
                 }
                 if a0 == 0 && b0 == 0 && a1 == bounds.width && b1 == bounds.height {
