@@ -65,6 +65,25 @@ pub struct NormalStats {
 
 const CHANNELS: usize = 10;
 
+/// The moments one point adds to a neighbourhood's sums, relative to a
+/// reference point: count, first and second moments
+/// (1, x, y, z, xx, xy, xz, yy, yz, zz).
+#[inline]
+fn moments(q: &Vector3<f64>) -> [f64; CHANNELS] {
+    [
+        1.0,
+        q.x,
+        q.y,
+        q.z,
+        q.x * q.x,
+        q.x * q.y,
+        q.x * q.z,
+        q.y * q.y,
+        q.y * q.z,
+        q.z * q.z,
+    ]
+}
+
 /// Reusable buffers of the normal estimation.
 #[derive(Debug, Default, Clone)]
 pub struct NormalEstimator {
@@ -255,18 +274,7 @@ impl NormalEstimator {
             let q = to_vec3(p) - c;
             let (u, v) = (pixel % w - b.u0, pixel / w - b.v0);
             let cell = &mut self.table[(v + 1) * tw + u + 1];
-            *cell = [
-                1.0,
-                q.x,
-                q.y,
-                q.z,
-                q.x * q.x,
-                q.x * q.y,
-                q.x * q.z,
-                q.y * q.y,
-                q.y * q.z,
-                q.z * q.z,
-            ];
+            *cell = moments(&q);
         }
         for v in 1..=b.height {
             let mut row = [0.0; CHANNELS];
@@ -323,18 +331,7 @@ impl NormalEstimator {
                     continue;
                 };
                 let q = q - p;
-                let row = [
-                    1.0,
-                    q.x,
-                    q.y,
-                    q.z,
-                    q.x * q.x,
-                    q.x * q.y,
-                    q.x * q.z,
-                    q.y * q.y,
-                    q.y * q.z,
-                    q.z * q.z,
-                ];
+                let row = moments(&q);
                 for (mc, r) in m.iter_mut().zip(row) {
                     *mc += r;
                 }
@@ -538,18 +535,7 @@ pub(crate) fn grid_normal(
             if q.norm() > reach * steps.max(1.0) {
                 continue;
             }
-            let row = [
-                1.0,
-                q.x,
-                q.y,
-                q.z,
-                q.x * q.x,
-                q.x * q.y,
-                q.x * q.z,
-                q.y * q.y,
-                q.y * q.z,
-                q.z * q.z,
-            ];
+            let row = moments(&q);
             for (mc, r) in m.iter_mut().zip(row) {
                 *mc += r;
             }
