@@ -108,9 +108,9 @@ fn main() {
     let sel = select_planes(&summaries, up, &config.selection);
     println!("selection: {sel:?}");
     let Ok(sel) = sel else { return };
-    let mut chosen = vec![("inclined", sel.inclined, Band::Spread)];
+    let mut chosen = vec![("inclined", sel.inclined, Band::Surface)];
     if let GroundSource::Plane(g) = sel.ground {
-        chosen.push(("ground", g, Band::Spread));
+        chosen.push(("ground", g, Band::Surface));
     }
     let mut means = Vec::new();
     for (name, idx, band) in chosen {
@@ -127,7 +127,7 @@ fn main() {
             &view,
             &members,
             &planes[idx].inliers,
-            &config.normals,
+            &config.normals.for_plane_noise(planes[idx].rms_m),
             &Vector3::zeros(),
         );
         let normals = normals.to_vec();

@@ -2,6 +2,8 @@
 //! the median slope, its error against `[truth]` and the mean stage timings.
 //!
 //! `cargo run --release -p slope-pipeline --example eval_recordings -- DIR...`
+//! (`METHODS=paper,tls`, `CONFIG='<toml>'`, `REPEAT=n` runs each frame n
+//! times and reports the last, with warm buffers)
 
 #[path = "../tests/common/mod.rs"]
 mod common;
@@ -19,6 +21,11 @@ fn main() {
             .collect(),
         Err(_) => SlopeMethod::ALL.to_vec(),
     };
+    let repeat: usize = std::env::var("REPEAT")
+        .ok()
+        .and_then(|r| r.parse().ok())
+        .unwrap_or(1)
+        .max(1);
     for method in methods {
         let base = match std::env::var("CONFIG") {
             Ok(text) => EstimatorConfig::from_toml_str(&text).expect("CONFIG"),
@@ -41,6 +48,10 @@ fn main() {
             let n = rec.depth_files.len();
             for k in 0..n {
                 let frame = rec.frame(k).expect("frame");
+                // REPEAT=n: run each frame n times (warm buffers), keep the last.
+                for _ in 1..repeat {
+                    est.estimate(&frame.view());
+                }
                 let e = est.estimate(&frame.view());
                 statuses.push(e.status.name());
                 if e.slope_deg.is_finite() {

@@ -190,16 +190,39 @@ pub struct NormalsConfig {
     /// The neighbourhood spans at least this radius on the surface, metres
     /// (more than K points near the camera); 0 = K points only.
     pub min_patch_radius_m: f64,
+    /// ...and at least this many times the RMS distance of the plane's
+    /// RANSAC inliers from their TLS plane (depth noise, quantisation and
+    /// roughness together): the noise bias of a local PCA normal is about
+    /// `2 (sigma / r)^2` radians, 0.3 degrees at 20; 0 = off.
+    pub patch_per_rms: f64,
 }
 
 impl Default for NormalsConfig {
     fn default() -> Self {
         Self {
             neighbours: 100,
-            max_window_radius_px: 40,
+            max_window_radius_px: 80,
             ray_noise_correction: false,
             interior_only: true,
             min_patch_radius_m: 0.1,
+            patch_per_rms: 20.0,
+        }
+    }
+}
+
+impl NormalsConfig {
+    /// This configuration for a plane whose RANSAC inliers lie `rms_m` (RMS)
+    /// from their TLS plane: the patch radius grows to `patch_per_rms *
+    /// rms_m` when that is larger than `min_patch_radius_m`.
+    pub fn for_plane_noise(&self, rms_m: f64) -> NormalsConfig {
+        let scaled = self.patch_per_rms * rms_m;
+        NormalsConfig {
+            min_patch_radius_m: if scaled.is_finite() {
+                self.min_patch_radius_m.max(scaled)
+            } else {
+                self.min_patch_radius_m
+            },
+            ..self.clone()
         }
     }
 }
@@ -384,6 +407,17 @@ impl EstimatorConfig {
             self.normals.max_window_radius_px,
             1,
         )?;
+        for (key, value) in [
+            (
+                "normals.min_patch_radius_m",
+                self.normals.min_patch_radius_m,
+            ),
+            ("normals.patch_per_rms", self.normals.patch_per_rms),
+        ] {
+            if !(value.is_finite() && value >= 0.0) {
+                return Err(invalid(key, value, "must be a finite number >= 0"));
+            }
+        }
         at_least("kmeans.clusters", self.kmeans.clusters, 1)?;
         at_least("kmeans.max_iterations", self.kmeans.max_iterations, 1)?;
         if !(self.kmeans.merge_spread_ratio.is_finite() && self.kmeans.merge_spread_ratio >= 0.0) {

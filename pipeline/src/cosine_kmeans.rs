@@ -109,24 +109,28 @@ impl CosineKmeans {
         for _ in 0..max_iterations.max(1) {
             iterations += 1;
             let mut changed = 0usize;
+            self.sums.clear();
+            self.sums.resize(k, Vector3::zeros());
+            counts.iter_mut().for_each(|c| *c = 0);
+            // Assignment (the smallest cosine distance is the largest dot
+            // product; ties go to the lower index) and the new sums in one
+            // pass.
             for (label, u) in self.labels.iter_mut().zip(&self.unit) {
-                let best = centres
-                    .iter()
-                    .enumerate()
-                    .map(|(j, c)| (j, cosine_distance(u, c)))
-                    .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))
-                    .map_or(0, |(j, _)| j);
+                let mut best = 0;
+                let mut best_dot = f64::NEG_INFINITY;
+                for (j, c) in centres.iter().enumerate() {
+                    let d = u.dot(c);
+                    if d > best_dot {
+                        best_dot = d;
+                        best = j;
+                    }
+                }
                 if *label != best {
                     *label = best;
                     changed += 1;
                 }
-            }
-            self.sums.clear();
-            self.sums.resize(k, Vector3::zeros());
-            counts.iter_mut().for_each(|c| *c = 0);
-            for (&label, u) in self.labels.iter().zip(&self.unit) {
-                self.sums[label] += u;
-                counts[label] += 1;
+                self.sums[best] += u;
+                counts[best] += 1;
             }
             for (c, s) in centres.iter_mut().zip(&self.sums) {
                 if let Some(m) = s.try_normalize(1e-12) {

@@ -23,7 +23,7 @@ use crate::plane_fit::{fit_least_squares, fit_tls, Moments, Plane};
 use crate::plane_selection::{
     axis_distance, select_planes, slope_sign, GroundSource, PlaneSummary,
 };
-use crate::ransac_planes::PlaneSegmenter;
+use crate::ransac_planes::{PlaneSegmenter, SegmentedPlane};
 use crate::statistical_outlier::StatisticalOutlierFilter;
 
 /// A fitted plane in the estimate.
@@ -246,8 +246,7 @@ impl Estimator {
                 let cfg = &self.config;
                 let Some(incl) = paper_plane_normals(
                     cloud,
-                    &inclined_seg.inliers,
-                    Band::Spread,
+                    inclined_seg,
                     cfg,
                     &mut self.pass_through,
                     &mut self.normals,
@@ -261,8 +260,7 @@ impl Estimator {
                     Some(g) => {
                         let Some(n) = paper_plane_normals(
                             cloud,
-                            &g.inliers,
-                            Band::Spread,
+                            g,
                             cfg,
                             &mut self.pass_through,
                             &mut self.normals,
@@ -359,8 +357,7 @@ impl Estimator {
 #[allow(clippy::too_many_arguments)]
 fn paper_plane_normals(
     cloud: &CloudView<'_>,
-    inliers: &[u32],
-    band: Band,
+    segment: &SegmentedPlane,
     config: &EstimatorConfig,
     pass_through: &mut PassThrough,
     normals: &mut NormalEstimator,
@@ -369,11 +366,18 @@ fn paper_plane_normals(
     clock: &mut Stopwatch,
 ) -> Option<Vector3<f64>> {
     out.clear();
-    let (members, _) =
-        pass_through.filter(cloud.points, inliers, config.pass_through.max_points, band);
+    let inliers = &segment.inliers;
+    let (members, _) = pass_through.filter(
+        cloud.points,
+        inliers,
+        config.pass_through.max_points,
+        Band::Surface,
+    );
     clock.lap("pass_through");
+    // The patch grows with the plane's own noise.
+    let normals_config = config.normals.for_plane_noise(segment.rms_m);
     let (found, _) =
-        normals.estimate_with_support(cloud, members, inliers, &config.normals, &Vector3::zeros());
+        normals.estimate_with_support(cloud, members, inliers, &normals_config, &Vector3::zeros());
     clock.lap("normals");
     let clustering = kmeans.cluster(
         found,

@@ -10,38 +10,48 @@
 //! (count, x, y, z, xx, xy, xz, yy, yz, zz; coordinates centred on the plane
 //! so nothing cancels) over the plane's bounding box, and read the
 //! covariance of any window in O(1). Each point takes the smallest square
-//! window (radius 5 for K = 100) that holds at least K of the plane's points,
-//! growing it near holes and edges up to `max_window_radius_px`; only a
-//! point that still has fewer than K falls back to the exact K nearest from a
-//! kiddo k-d tree over the plane's points. On a plane, a window of >= K
-//! samples around the point and the K nearest samples are two patches of the
-//! same surface with about the same number of points, so the fitted normal is
-//! the same plane normal with the same noise averaging. The 3x3
-//! eigenvector comes from the closed-form solver in `plane_fit.rs` (checked
-//! against nalgebra's symmetric eigen-decomposition in the tests).
+//! window that holds at least K of the plane's points *and* spans the patch
+//! radius on the surface (below), growing it near holes and edges up to
+//! `max_window_radius_px`; only a point that still has fewer than K falls
+//! back to the exact K nearest from a kiddo k-d tree over the plane's points
+//! (and not even that when only interior normals are kept, as by default:
+//! such a point is no interior point). On a plane, a window of >= K samples
+//! around the point and the K nearest samples are two patches of the same
+//! surface, so the fitted normal is the same plane normal with (at least)
+//! the same noise averaging. The 3x3 eigenvector comes from the closed-form
+//! solver in `plane_fit.rs` (checked against nalgebra's symmetric
+//! eigen-decomposition in the tests). The table is built in one pass, each
+//! cell written once.
 //!
-//! **Noise model (`ray_noise_correction`, on by default).** The smallest
-//! eigenvector is the least-squares plane for *isotropic* noise. A depth
-//! camera's noise runs along the viewing ray (the depth is wrong, not the
-//! direction), and on a patch of ~100 points, a few centimetres across, that
-//! noise is not small against the patch: on `slope-synth`'s Kinect v2
-//! recordings the eigenvector leans 2-5 degrees away from the ray (the
-//! ground, seen at grazing incidence, most), and averaging angles does not
-//! remove a bias. With points `p = q + e r` (q on the plane, e the depth
+//! **Patch radius.** K = 100 is a minimum. The smallest eigenvector is the
+//! least-squares plane for *isotropic* noise; a depth camera's noise runs
+//! along the viewing ray, and on a patch of radius r it tilts the
+//! eigenvector by about `2 (sigma / r)^2` radians (sigma the noise normal to
+//! the surface): on the K = 100 patch of a Kinect v2 (2-3 cm across) that is
+//! 2-5 degrees on the grazing ground of `slope-synth` recordings, and
+//! averaging angles does not remove a bias. So the patch spans at least
+//! `min_patch_radius_m` (10 cm) and at least `patch_per_rms` (20) times the
+//! plane's own RMS residual about its TLS fit (`NormalsConfig::
+//! for_plane_noise`; the residual holds depth noise, quantisation and real
+//! roughness together, measured on the frame, for any sensor): the bias
+//! stays near 0.3 degrees. A Kinect v1 wall at 5 m (7 cm disparity
+//! terraces, RMS ~3 cm) gets ~60 cm patches, a Kinect v2 floor at 2 m the
+//! 10 cm minimum. Summed-area tables make the patch size free.
+//!
+//! **Noise model (`ray_noise_correction`, off by default).** The alternative
+//! to a large patch: with points `p = q + e r` (q on the plane, e the depth
 //! error along the unit ray r, variance s^2) the covariance is
-//! `C = C_q + s^2 r r^T`, so we subtract the expected `s^2 r r^T` before
-//! taking the smallest eigenvector: the plane's own covariance `C_q`. The
-//! noise is the Kinect v2 axial model of Fankhauser et al. (2015),
+//! `C = C_q + s^2 r r^T`, so subtracting the expected `s^2 r r^T` before
+//! taking the smallest eigenvector gives the plane's own covariance `C_q`.
+//! The noise is the Kinect v2 axial model of Fankhauser et al. (2015),
 //! `sigma_z = 1.5 - 0.5 z + 0.3 z^2 + 0.1 z^1.5 t^2 / (pi/2 - t)^2` mm at depth
 //! z m and incidence t (from the uncorrected normal), plus millimetre depth
-//! quantisation, plus 0.5 px of lateral jitter (a pixel's depth read a
-//! fraction of a pixel off, which on a surface seen obliquely is a depth
-//! error of `0.5 / f` times the depth's rate of change across the image),
-//! along the ray `s = sigma_z / r_z`; it is never subtracted
-//! beyond the point where `C - s^2 r r^T` turns singular (`s^2 <=
-//! 1 / r^T C^-1 r`), so a patch whose spread is structure rather than noise
-//! (real surfaces have bumps) is never over-corrected. Without noise nothing
-//! changes (tested); with depth noise the normals average to the plane's.
+//! quantisation, plus 0.5 px of lateral jitter, along the ray
+//! `s = sigma_z / r_z`; never subtracted beyond the point where
+//! `C - s^2 r r^T` turns singular. It is exact on the simulator's noise
+//! (tested) but tied to one sensor model: on real frames (libfreenect2's
+//! filtered Kinect v2 depth, a Kinect v1) it over-corrected by 1-3 degrees,
+//! which is why the measured patch radius replaced it.
 
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use nalgebra::Vector3;
@@ -88,6 +98,8 @@ fn moments(q: &Vector3<f64>) -> [f64; CHANNELS] {
 #[derive(Debug, Default, Clone)]
 pub struct NormalEstimator {
     table: Vec<[f64; CHANNELS]>,
+    /// Per pixel of the bounding box: whether it is a support point.
+    in_support: Vec<bool>,
     normals: Vec<Vector3<f64>>,
     radius: Vec<u16>,
     fallback: Vec<usize>,
@@ -233,19 +245,25 @@ impl NormalEstimator {
                 stats.undefined += 1;
             }
         }
+        // Interior points only: a point the windows could not serve is no
+        // interior point, so when the interior normals will be kept alone
+        // the k-d tree is not built for the others.
+        let interior = self.radius.iter().filter(|&&r| r == 0).count();
+        let interior_only = config.interior_only && interior >= k.max(members.len() / 10);
+        if interior_only {
+            stats.border += self.fallback.len();
+            self.fallback.clear();
+        }
         if !self.fallback.is_empty() {
             stats.from_tree = self.fallback.len();
             stats.undefined +=
                 self.tree_normals(cloud, members, support, k, viewpoint, noise_scale);
         }
-        if config.interior_only {
-            let interior = self.radius.iter().filter(|&&r| r == 0).count();
-            if interior >= k.max(members.len() / 10) {
-                for (n, &r) in self.normals.iter_mut().zip(&self.radius) {
-                    if r != 0 && n.x.is_finite() {
-                        *n = nan;
-                        stats.border += 1;
-                    }
+        if interior_only {
+            for (n, &r) in self.normals.iter_mut().zip(&self.radius) {
+                if r != 0 && n.x.is_finite() {
+                    *n = nan;
+                    stats.border += 1;
                 }
             }
         }
@@ -261,31 +279,41 @@ impl NormalEstimator {
         c: &Vector3<f64>,
     ) {
         let tw = b.width + 1;
-        self.table.clear();
-        self.table.resize(tw * (b.height + 1), [0.0; CHANNELS]);
         let w = cloud.width;
-        // Scatter the members' moments into the table's cells (offset by one
-        // row and column), then integrate.
+        self.in_support.clear();
+        self.in_support.resize(b.width * b.height, false);
         for &pixel in members {
             let pixel = pixel as usize;
-            let Some(p) = cloud.points.get(pixel).filter(|p| is_measured(p)) else {
-                continue;
-            };
-            let q = to_vec3(p) - c;
-            let (u, v) = (pixel % w - b.u0, pixel / w - b.v0);
-            let cell = &mut self.table[(v + 1) * tw + u + 1];
-            *cell = moments(&q);
+            if cloud.points.get(pixel).is_some_and(is_measured) {
+                self.in_support[(pixel / w - b.v0) * b.width + pixel % w - b.u0] = true;
+            }
         }
-        for v in 1..=b.height {
+        // One pass, row by row: each cell is written once (a zeroed table
+        // and a scatter pass would touch the ~17 MB of a full-frame table
+        // three times).
+        self.table.clear();
+        self.table.reserve(tw * (b.height + 1));
+        self.table
+            .extend(std::iter::repeat_n([0.0; CHANNELS], tw + 1));
+        for v in 0..b.height {
             let mut row = [0.0; CHANNELS];
-            for u in 1..=b.width {
-                let i = v * tw + u;
-                let above = self.table[i - tw];
-                let cell = &mut self.table[i];
+            for u in 0..b.width {
+                if self.in_support[v * b.width + u] {
+                    let p = &cloud.points[(v + b.v0) * w + u + b.u0];
+                    let m = moments(&(to_vec3(p) - c));
+                    for (r, x) in row.iter_mut().zip(m) {
+                        *r += x;
+                    }
+                }
+                let above = &self.table[v * tw + u + 1];
+                let mut cell = [0.0; CHANNELS];
                 for ch in 0..CHANNELS {
-                    row[ch] += cell[ch];
                     cell[ch] = row[ch] + above[ch];
                 }
+                self.table.push(cell);
+            }
+            if v + 1 < b.height {
+                self.table.push([0.0; CHANNELS]);
             }
         }
     }
@@ -506,16 +534,19 @@ pub fn orient(n: Vector3<f64>, p: &Vector3<f64>, viewpoint: &Vector3<f64>) -> Ve
 }
 
 /// A coarse normal at pixel `(u, v)` from the measured, `keep`-marked
-/// pixels of the `(2r+1)^2` window that lie within a few pixel spacings of
-/// it in 3D (so a depth edge does not bend it). Used to gate RANSAC inliers.
+/// pixels of the `(2r+1)^2` window, every `step`-th in both directions,
+/// that lie within a few pixel spacings of it in 3D (so a depth edge does
+/// not bend it); at least 6 of them. Used to gate RANSAC inliers.
 pub(crate) fn grid_normal(
     cloud: &CloudView<'_>,
     keep: &[bool],
     u: usize,
     v: usize,
     radius: usize,
+    step: usize,
 ) -> Option<Vector3<f64>> {
     let w = cloud.width;
+    let step = step.max(1);
     let centre = to_vec3(cloud.points.get(v * w + u)?);
     let focal = cloud.focal_px();
     // Up to 8 pixel spacings per pixel step: surfaces seen at down to ~7
@@ -524,8 +555,10 @@ pub(crate) fn grid_normal(
     let mut m = [0.0; CHANNELS];
     let (u0, u1) = (u.saturating_sub(radius), (u + radius + 1).min(w));
     let (v0, v1) = (v.saturating_sub(radius), (v + radius + 1).min(cloud.height));
-    for vv in v0..v1 {
-        for uu in u0..u1 {
+    // Offsets that are multiples of `step` from the centre.
+    let (u0, v0) = (u - (u - u0) / step * step, v - (v - v0) / step * step);
+    for vv in (v0..v1).step_by(step) {
+        for uu in (u0..u1).step_by(step) {
             let i = vv * w + uu;
             if !keep.get(i).copied().unwrap_or(false) {
                 continue;
@@ -740,6 +773,47 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn patch_scaled_to_the_plane_noise_removes_the_bias_of_coarse_depth() {
+        // Depth noise of a Kinect v1 at range (sigma = 4 mm * z^2: 1.6 cm at
+        // 2 m) on the grazing ground: a 10 cm patch is too small and its
+        // normals lean towards the rays; the patch scaled to the plane's
+        // own RMS residual (NormalsConfig::for_plane_noise) is not.
+        let scene = Scene::ramp(30.0);
+        let up = scene.to_camera(&Vector3::z());
+        let exact = SceneCloud::render_with_intrinsics(&scene, 512, 424, 365.0, 0.0, 7);
+        let members: Vec<u32> = all_measured(&exact)
+            .into_iter()
+            .filter(|&i| {
+                let p = exact.view().point(i as usize).unwrap();
+                (up.dot(&p) + 0.5).abs() < 1e-4 && p.z > 1.0
+            })
+            .collect();
+        let cloud = SceneCloud::render_with_intrinsics(&scene, 512, 424, 365.0, 0.02, 7);
+        let view = cloud.view();
+        let mut m = crate::plane_fit::Moments::new();
+        for &i in &members {
+            m.add(&view.point(i as usize).unwrap());
+        }
+        let plane = crate::plane_fit::fit_tls(&m).unwrap();
+        let c = m.covariance().unwrap();
+        let rms = plane.normal.dot(&(c * plane.normal)).sqrt();
+        let bias = |cfg: &NormalsConfig| {
+            let mut est = NormalEstimator::new();
+            let (normals, _) = est.estimate(&view, &members, cfg, &Vector3::zeros());
+            let sum: Vector3<f64> = normals.iter().filter(|n| n.x.is_finite()).sum();
+            crate::cloud::angle_between_deg(&sum, &up)
+        };
+        let fixed = bias(&NormalsConfig::default());
+        let scaled = bias(&NormalsConfig::default().for_plane_noise(rms));
+        assert!(rms > 0.005, "rms {rms}");
+        assert!(fixed > 1.0, "10 cm patch bias {fixed}");
+        assert!(
+            scaled < 0.5 && scaled < fixed / 3.0,
+            "scaled {scaled} vs {fixed}"
+        );
     }
 
     #[test]

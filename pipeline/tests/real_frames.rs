@@ -1,19 +1,17 @@
 //! The real frames in `shared/data` (two Kinect v2 stair views, one Kinect
 //! v1 office): riser vs tread/floor and wall vs floor are 90 degrees as
 //! built; a correct estimator is within 2.5 degrees (each README). Every
-//! method must hold that at the default seed. Over seeds 0..=7 (RANSAC
-//! hypotheses and the cumulative draws change with the seed) the paper
-//! method's median must hold it too and every single seed must stay within
-//! 3 degrees: single seeds reach 2.5-2.7 degrees on stairs-front and office
-//! today (a known weakness, see the pipeline README), which this test keeps
-//! from getting worse. Skipped with a note when the data is absent.
+//! method must hold that at the default seed, and the paper method at every
+//! seed of `SEEDS` (RANSAC hypotheses and the cumulative draws change with
+//! the seed). Skipped with a note when the data is absent (CI sets
+//! SLOPE_REQUIRE_SHARED_DATA, which turns the skip into a failure).
 
 mod common;
 
 use slope_pipeline::{EstimateStatus, Estimator, EstimatorConfig, SlopeMethod};
 
 /// Seeds the paper method is checked with.
-const SEEDS: std::ops::RangeInclusive<u64> = 0..=7;
+const SEEDS: std::ops::RangeInclusive<u64> = 0..=15;
 
 fn measure(name: &str, method: SlopeMethod, seed: u64) -> Option<f64> {
     let dir = common::shared_data(name)?;
@@ -52,32 +50,14 @@ fn check(name: &str, method: SlopeMethod, seed: u64) {
     }
 }
 
-/// Largest error of the paper method at any one seed.
-const SINGLE_SEED_BAR_DEG: f64 = 3.0;
-
-/// Every method at the default seed; the paper method over all seeds.
+/// Every method at the default seed; the paper method at every seed.
 fn check_all(name: &str) {
     for method in SlopeMethod::ALL {
         check(name, method, 0);
     }
-    let mut slopes: Vec<f64> = SEEDS
-        .filter_map(|seed| measure(name, SlopeMethod::Paper, seed))
-        .collect();
-    if slopes.is_empty() {
-        return;
+    for seed in SEEDS.skip(1) {
+        check(name, SlopeMethod::Paper, seed);
     }
-    for slope in &slopes {
-        assert!(
-            (slope - 90.0).abs() <= SINGLE_SEED_BAR_DEG,
-            "{name} paper: a seed gave {slope} (all: {slopes:?})"
-        );
-    }
-    slopes.sort_by(f64::total_cmp);
-    let median = (slopes[slopes.len() / 2] + slopes[(slopes.len() - 1) / 2]) / 2.0;
-    assert!(
-        (median - 90.0).abs() <= 2.5,
-        "{name} paper: median over seeds {median} (all: {slopes:?})"
-    );
 }
 
 #[test]
