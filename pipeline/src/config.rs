@@ -511,6 +511,27 @@ mod tests {
     }
 
     #[test]
+    fn patch_radius_follows_the_plane_noise() {
+        let n = NormalsConfig::default();
+        // 20 x 1 cm RMS = 20 cm; 20 x 1 mm is under the 10 cm minimum.
+        assert!((n.for_plane_noise(0.01).min_patch_radius_m - 0.2).abs() < 1e-12);
+        assert_eq!(n.for_plane_noise(0.001).min_patch_radius_m, 0.1);
+        assert_eq!(n.for_plane_noise(f64::NAN).min_patch_radius_m, 0.1);
+        let off = NormalsConfig {
+            patch_per_rms: 0.0,
+            ..NormalsConfig::default()
+        };
+        assert_eq!(off.for_plane_noise(0.05).min_patch_radius_m, 0.1);
+        let e = EstimatorConfig::from_toml_str(
+            "[normals]
+patch_per_rms = -1
+",
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("normals.patch_per_rms"), "{e}");
+    }
+
+    #[test]
     fn unknown_keys_and_methods_are_errors() {
         let e = EstimatorConfig::from_toml_str("[ransac]\ndistance = 0.01\n").unwrap_err();
         assert!(e.to_string().contains("distance"), "{e}");

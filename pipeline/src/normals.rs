@@ -713,10 +713,10 @@ mod tests {
         }
     }
 
-    #[test]
-    fn ray_noise_correction_is_exact_without_noise_and_unbiased_with_it() {
-        // The ground in front of a ramp, seen at grazing incidence, where the
-        // depth noise is largest.
+    /// The ground in front of a 30 degree ramp beyond 1 m, seen at grazing
+    /// incidence where the depth noise is largest: the scene, its up vector
+    /// in camera coordinates and the ground's pixels.
+    fn grazing_ground() -> (Scene, Vector3<f64>, Vec<u32>) {
         let scene = Scene::ramp(30.0);
         let up = scene.to_camera(&Vector3::z());
         let exact = SceneCloud::render_with_intrinsics(&scene, 512, 424, 365.0, 0.0, 7);
@@ -727,6 +727,25 @@ mod tests {
                 (up.dot(&p) + 0.5).abs() < 1e-4 && p.z > 1.0
             })
             .collect();
+        (scene, up, members)
+    }
+
+    /// Angle between the sum of the members' normals and `truth`, degrees.
+    fn mean_normal_error(
+        view: &CloudView<'_>,
+        members: &[u32],
+        cfg: &NormalsConfig,
+        truth: &Vector3<f64>,
+    ) -> f64 {
+        let mut est = NormalEstimator::new();
+        let (normals, _) = est.estimate(view, members, cfg, &Vector3::zeros());
+        let sum: Vector3<f64> = normals.iter().filter(|n| n.x.is_finite()).sum();
+        crate::cloud::angle_between_deg(&sum, truth)
+    }
+
+    #[test]
+    fn ray_noise_correction_is_exact_without_noise_and_unbiased_with_it() {
+        let (scene, up, members) = grazing_ground();
         assert!(members.len() > 10_000, "{}", members.len());
         for sigma in [0.0, crate::fixtures::KINECT2_NOISE] {
             let cloud = SceneCloud::render_with_intrinsics(&scene, 512, 424, 365.0, sigma, 7);
@@ -740,10 +759,7 @@ mod tests {
                     max_window_radius_px: 12,
                     ..NormalsConfig::default()
                 };
-                let mut est = NormalEstimator::new();
-                let (normals, _) = est.estimate(&view, &members, &cfg, &Vector3::zeros());
-                let sum: Vector3<f64> = normals.iter().filter(|n| n.x.is_finite()).sum();
-                crate::cloud::angle_between_deg(&sum, &up)
+                mean_normal_error(&view, &members, &cfg, &up)
             };
             let (pca, corrected) = (mean_err(false), mean_err(true));
             if sigma == 0.0 {
@@ -758,15 +774,7 @@ mod tests {
                 );
                 // The default 10 cm patch: plain PCA, the noise is small
                 // against the patch and the bias is gone without a model.
-                let mut est = NormalEstimator::new();
-                let (normals, _) = est.estimate(
-                    &view,
-                    &members,
-                    &NormalsConfig::default(),
-                    &Vector3::zeros(),
-                );
-                let sum: Vector3<f64> = normals.iter().filter(|n| n.x.is_finite()).sum();
-                let wide = crate::cloud::angle_between_deg(&sum, &up);
+                let wide = mean_normal_error(&view, &members, &NormalsConfig::default(), &up);
                 assert!(
                     wide < 0.1 && wide < pca / 3.0,
                     "10 cm patch bias {wide} vs {pca}"
@@ -777,20 +785,12 @@ mod tests {
 
     #[test]
     fn patch_scaled_to_the_plane_noise_removes_the_bias_of_coarse_depth() {
-        // Depth noise of a Kinect v1 at range (sigma = 4 mm * z^2: 1.6 cm at
-        // 2 m) on the grazing ground: a 10 cm patch is too small and its
-        // normals lean towards the rays; the patch scaled to the plane's
-        // own RMS residual (NormalsConfig::for_plane_noise) is not.
-        let scene = Scene::ramp(30.0);
-        let up = scene.to_camera(&Vector3::z());
-        let exact = SceneCloud::render_with_intrinsics(&scene, 512, 424, 365.0, 0.0, 7);
-        let members: Vec<u32> = all_measured(&exact)
-            .into_iter()
-            .filter(|&i| {
-                let p = exact.view().point(i as usize).unwrap();
-                (up.dot(&p) + 0.5).abs() < 1e-4 && p.z > 1.0
-            })
-            .collect();
+        // Coarse depth (sigma = 2 cm * z^2 along the ray, the order of a
+        // Kinect v1's disparity steps at 4-5 m) on the grazing ground: a
+        // 10 cm patch is too small and its normals lean towards the rays;
+        // the patch scaled to the plane's own RMS residual
+        // (NormalsConfig::for_plane_noise) is not.
+        let (scene, up, members) = grazing_ground();
         let cloud = SceneCloud::render_with_intrinsics(&scene, 512, 424, 365.0, 0.02, 7);
         let view = cloud.view();
         let mut m = crate::plane_fit::Moments::new();
@@ -800,12 +800,7 @@ mod tests {
         let plane = crate::plane_fit::fit_tls(&m).unwrap();
         let c = m.covariance().unwrap();
         let rms = plane.normal.dot(&(c * plane.normal)).sqrt();
-        let bias = |cfg: &NormalsConfig| {
-            let mut est = NormalEstimator::new();
-            let (normals, _) = est.estimate(&view, &members, cfg, &Vector3::zeros());
-            let sum: Vector3<f64> = normals.iter().filter(|n| n.x.is_finite()).sum();
-            crate::cloud::angle_between_deg(&sum, &up)
-        };
+        let bias = |cfg: &NormalsConfig| mean_normal_error(&view, &members, cfg, &up);
         let fixed = bias(&NormalsConfig::default());
         let scaled = bias(&NormalsConfig::default().for_plane_noise(rms));
         assert!(rms > 0.005, "rms {rms}");
