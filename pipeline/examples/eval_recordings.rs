@@ -45,7 +45,7 @@ fn main() {
             let mut stages: Vec<(&'static str, f64)> = Vec::new();
             let mut total = 0.0;
             let mut statuses = Vec::new();
-            let n = rec.depth_files.len();
+            let n = rec.len();
             for k in 0..n {
                 let frame = rec.frame(k).expect("frame");
                 // REPEAT=n: run each frame n times (warm buffers), keep the last.
