@@ -41,11 +41,14 @@ fn stages(c: &mut Criterion) {
     });
     let mut rng = ChaCha8Rng::seed_from_u64(0);
     let planes = seg.segment(&view, &keep, &config.ransac, &mut rng).to_vec();
-    let largest = planes
+    let (largest, rms_m) = planes
         .iter()
         .max_by_key(|p| p.inliers.len())
-        .map(|p| p.inliers.clone())
+        .map(|p| (p.inliers.clone(), p.rms_m))
         .unwrap_or_default();
+    // The normals as the estimator computes them: 10k surface-uniform
+    // members, neighbourhoods from the whole plane, the noise-scaled patch.
+    let normals_config = config.normals.for_plane_noise(rms_m);
 
     let mut pt = PassThrough::new();
     c.bench_function("pass_through/largest_plane", |b| {
@@ -55,7 +58,7 @@ fn stages(c: &mut Criterion) {
                     view.points,
                     &largest,
                     config.pass_through.max_points,
-                    Band::Middle,
+                    Band::Surface,
                 )
                 .0
                 .len(),
@@ -67,7 +70,7 @@ fn stages(c: &mut Criterion) {
             view.points,
             &largest,
             config.pass_through.max_points,
-            Band::Middle,
+            Band::Surface,
         )
         .0
         .to_vec();
@@ -76,13 +79,25 @@ fn stages(c: &mut Criterion) {
     c.bench_function("normals/10k_points_k100", |b| {
         b.iter(|| {
             black_box(
-                ne.estimate(&view, &members, &config.normals, &Vector3::zeros())
-                    .1,
+                ne.estimate_with_support(
+                    &view,
+                    &members,
+                    &largest,
+                    &normals_config,
+                    &Vector3::zeros(),
+                )
+                .1,
             )
         })
     });
     let normals = ne
-        .estimate(&view, &members, &config.normals, &Vector3::zeros())
+        .estimate_with_support(
+            &view,
+            &members,
+            &largest,
+            &normals_config,
+            &Vector3::zeros(),
+        )
         .0
         .to_vec();
 

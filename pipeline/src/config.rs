@@ -125,18 +125,23 @@ pub struct RansacConfig {
     /// Probability of drawing at least one all-inlier sample, which sets the
     /// adaptive iteration count.
     pub confidence: f64,
-    /// Hypotheses are drawn and scored on every `sample_stride_px`-th pixel in
-    /// both directions; the chosen plane then takes its inliers from every
-    /// pixel.
+    /// Planes are found on every `sample_stride_px`-th pixel in both
+    /// directions (the sample grid); at the end every pixel within the
+    /// threshold goes to the nearest of the planes that took the sample
+    /// points around it (its 3x3 sample cells).
     pub sample_stride_px: usize,
     /// A sample point whose local normal is further than this from the
     /// hypothesis' normal is not its inlier, degrees; 0 or >= 90 disables.
     pub normal_threshold_deg: f64,
-    /// Stop when the last plane had fewer inliers than this.
+    /// A plane's region on the sample grid must stand for at least this
+    /// many pixels (`min_plane_points / stride^2` sample points), else its
+    /// sample inliers are set aside as a failure (the 9th failure ends the
+    /// search); planes with fewer pixels in the end are dropped.
     pub min_plane_points: usize,
-    /// Stop when fewer than this fraction of the filtered points is left.
+    /// Stop when fewer than this fraction of the sample points is free
+    /// (neither in a plane nor set aside by a failure).
     pub min_remaining_fraction: f64,
-    /// Stop after this many planes.
+    /// Stop after this many planes (at most 65,535).
     pub max_planes: usize,
 }
 
@@ -400,6 +405,13 @@ impl EstimatorConfig {
             self.ransac.min_remaining_fraction,
         )?;
         at_least("ransac.max_planes", self.ransac.max_planes, 1)?;
+        if self.ransac.max_planes > crate::ransac_planes::MAX_PLANES {
+            return Err(invalid(
+                "ransac.max_planes",
+                self.ransac.max_planes,
+                "must be at most 65535",
+            ));
+        }
         at_least("pass_through.max_points", self.pass_through.max_points, 3)?;
         at_least("normals.neighbours", self.normals.neighbours, 3)?;
         at_least(

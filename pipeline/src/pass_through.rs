@@ -74,10 +74,10 @@ impl PassThrough {
         Self::default()
     }
 
-    /// Keeps at most `max_points` of `members` (pixel indices into `points`):
-    /// the band of ray elevations `y / z` at `band`. Members without a
-    /// reading are dropped. Returns the kept indices (in pixel order) and
-    /// the range.
+    /// Keeps at most `max_points` of `members` (pixel indices into `points`),
+    /// chosen as `band` says (all of them when there are no more). Members
+    /// without a reading are dropped. Returns the kept indices (in pixel
+    /// order) and the range of ray elevations `y / z` they span.
     pub fn filter(
         &mut self,
         points: &[CloudPoint],
@@ -157,7 +157,7 @@ impl PassThrough {
 fn surface_sample(points: &[CloudPoint], keyed: &mut Vec<(f32, u32)>, max_points: usize) {
     keyed.sort_unstable_by_key(|&(_, i)| i);
     let footprint = |i: u32| {
-        let z = f64::from(points[i as usize].z_m);
+        let z = f64::from(points[i as usize].z_m).abs();
         z * z * z
     };
     let total: f64 = keyed.iter().map(|&(_, i)| footprint(i)).sum();
