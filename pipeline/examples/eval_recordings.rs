@@ -3,7 +3,7 @@
 //!
 //! `cargo run --release -p slope-pipeline --example eval_recordings -- DIR...`
 //! (`METHODS=paper,tls`, `CONFIG='<toml>'`, `REPEAT=n` runs each frame n
-//! times and reports the last, with warm buffers)
+//! times and reports the median timings)
 
 #[path = "../tests/common/mod.rs"]
 mod common;
@@ -48,21 +48,32 @@ fn main() {
             let n = rec.len();
             for k in 0..n {
                 let frame = rec.frame(k).expect("frame");
-                // REPEAT=n: run each frame n times (warm buffers), keep the last.
-                for _ in 1..repeat {
-                    est.estimate(&frame.view());
-                }
-                let e = est.estimate(&frame.view());
+                // REPEAT=n: run each frame n times (warm buffers) and take
+                // each timing's median; the estimate is the same every time.
+                let runs: Vec<_> = (0..repeat).map(|_| est.estimate(&frame.view())).collect();
+                let e = &runs[0];
                 statuses.push(e.status.name());
                 if e.slope_deg.is_finite() {
                     slopes.push(e.slope_deg);
                     stds.push(e.slope_std_deg);
                 }
-                total += e.timings.total_ms;
-                for (name, ms) in &e.timings.stages {
+                let median_ms = |pick: &dyn Fn(&slope_pipeline::Estimate) -> f64| {
+                    let mut v: Vec<f64> = runs.iter().map(pick).collect();
+                    v.sort_by(f64::total_cmp);
+                    v[v.len() / 2]
+                };
+                total += median_ms(&|r| r.timings.total_ms);
+                for (name, _) in &e.timings.stages {
+                    let ms = median_ms(&|r| {
+                        r.timings
+                            .stages
+                            .iter()
+                            .find(|(m, _)| m == name)
+                            .map_or(0.0, |(_, t)| *t)
+                    });
                     match stages.iter_mut().find(|(m, _)| m == name) {
                         Some((_, t)) => *t += ms,
-                        None => stages.push((name, *ms)),
+                        None => stages.push((name, ms)),
                     }
                 }
             }

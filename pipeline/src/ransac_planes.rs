@@ -112,6 +112,7 @@ pub struct PlaneSegmenter {
     cell_candidates: Vec<([u16; 9], u8)>,
     /// Per coarse cell: its sample point (NaN if none).
     cell_point: Vec<Vector3<f64>>,
+    in_work: Vec<bool>,
     coarse_w: usize,
     coarse_h: usize,
     stride: usize,
@@ -285,36 +286,52 @@ impl PlaneSegmenter {
     /// plane, so it ends; a coplanar piece elsewhere is never adjacent.
     fn relax_cells(&mut self, found: &[Plane], t: Threshold) {
         let (cw, ch) = (self.coarse_w, self.coarse_h);
-        let mut changed = true;
-        let mut sweeps = 0;
-        while changed && sweeps < cw + ch {
-            changed = false;
-            sweeps += 1;
-            for cv in 0..ch {
-                for cu in 0..cw {
-                    let c = cv * cw + cu;
-                    let a = self.cell_plane[c];
-                    if a == NO_PLANE {
-                        continue;
-                    }
-                    let p = self.cell_point[c];
-                    let limit = t.at(&p);
-                    let mut best = (found[a as usize].signed_distance(&p).abs(), a);
-                    for r in cv.saturating_sub(1)..(cv + 2).min(ch) {
-                        for q in cu.saturating_sub(1)..(cu + 2).min(cw) {
-                            let b = self.cell_plane[r * cw + q];
-                            if b == NO_PLANE || b == best.1 {
-                                continue;
-                            }
-                            let d = found[b as usize].signed_distance(&p).abs();
-                            if d < best.0 && d <= limit {
-                                best = (d, b);
-                            }
-                        }
-                    }
-                    if best.1 != a {
-                        self.cell_plane[c] = best.1;
-                        changed = true;
+        let neighbours = |c: usize| {
+            let (cu, cv) = (c % cw, c / cw);
+            (cv.saturating_sub(1)..(cv + 2).min(ch)).flat_map(move |r| {
+                (cu.saturating_sub(1)..(cu + 2).min(cw)).map(move |q| r * cw + q)
+            })
+        };
+        // Work list: the cells on a border between two planes, then the
+        // neighbours of every cell that moved.
+        self.stack.clear();
+        self.in_work.clear();
+        self.in_work.resize(cw * ch, false);
+        for c in 0..cw * ch {
+            let a = self.cell_plane[c];
+            if a != NO_PLANE
+                && neighbours(c).any(|q| {
+                    let b = self.cell_plane[q];
+                    b != NO_PLANE && b != a
+                })
+            {
+                self.stack.push(c as u32);
+                self.in_work[c] = true;
+            }
+        }
+        while let Some(c) = self.stack.pop() {
+            let c = c as usize;
+            self.in_work[c] = false;
+            let a = self.cell_plane[c];
+            let p = self.cell_point[c];
+            let limit = t.at(&p);
+            let mut best = (found[a as usize].signed_distance(&p).abs(), a);
+            for q in neighbours(c) {
+                let b = self.cell_plane[q];
+                if b == NO_PLANE || b == best.1 {
+                    continue;
+                }
+                let d = found[b as usize].signed_distance(&p).abs();
+                if d < best.0 && d <= limit {
+                    best = (d, b);
+                }
+            }
+            if best.1 != a {
+                self.cell_plane[c] = best.1;
+                for q in neighbours(c) {
+                    if self.cell_plane[q] != NO_PLANE && !self.in_work[q] {
+                        self.in_work[q] = true;
+                        self.stack.push(q as u32);
                     }
                 }
             }
