@@ -165,7 +165,7 @@ impl PlaneSegmenter {
             .resize(self.coarse_w * self.coarse_h, NO_PLANE);
         let total = self.sample_xyz.len();
         // A plane's sample region must stand for `min_plane_points` pixels.
-        let s2 = (self.stride * self.stride) as f64;
+        let s2 = (self.stride as f64).powi(2);
         let min_cells = ((config.min_plane_points as f64 / s2).ceil() as usize).max(3);
         let mut failures = 0;
         let t = Threshold {
