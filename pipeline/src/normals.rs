@@ -565,7 +565,8 @@ pub(crate) fn grid_normal(
             }
             let q = to_vec3(&cloud.points[i]) - centre;
             let steps = uu.abs_diff(u).max(vv.abs_diff(v)) as f64;
-            if q.norm() > reach * steps.max(1.0) {
+            let limit = reach * steps.max(1.0);
+            if q.norm_squared() > limit * limit {
                 continue;
             }
             let row = moments(&q);

@@ -113,6 +113,7 @@ pub struct PlaneSegmenter {
     /// Per coarse cell: its sample point (NaN if none).
     cell_point: Vec<Vector3<f64>>,
     in_work: Vec<bool>,
+    column_cell: Vec<usize>,
     coarse_w: usize,
     coarse_h: usize,
     stride: usize,
@@ -382,12 +383,15 @@ impl PlaneSegmenter {
                 self.cell_candidates.push(set);
             }
         }
+        // The sample column of every pixel column (no division per pixel).
+        self.column_cell.clear();
+        self.column_cell
+            .extend((0..w).map(|u| (u.saturating_sub(half) / s).min(cw - 1)));
         for v in 0..h {
-            let row = (v.saturating_sub(half) / s).min(ch.saturating_sub(1)) * cw;
-            for u in 0..w {
+            let row = (v.saturating_sub(half) / s).min(ch - 1) * cw;
+            for (u, &column) in self.column_cell.iter().enumerate() {
                 let i = v * w + u;
-                let (candidates, n) = &self.cell_candidates
-                    [row + (u.saturating_sub(half) / s).min(cw.saturating_sub(1))];
+                let (candidates, n) = &self.cell_candidates[row + column];
                 let n = *n as usize;
                 if n == 0 || !keep[i] || !is_measured(&cloud.points[i]) {
                     continue;
