@@ -766,6 +766,19 @@ mod tests {
     use crate::fixtures::{Scene, SceneCloud};
     use rand::SeedableRng;
 
+    /// The planes of `cloud`'s valid points.
+    fn segment_cloud(cloud: &SceneCloud, cfg: &RansacConfig, seed: u64) -> Vec<SegmentedPlane> {
+        let keep: Vec<bool> = cloud.points.iter().map(|p| p.is_valid()).collect();
+        PlaneSegmenter::new()
+            .segment(
+                &cloud.view(),
+                &keep,
+                cfg,
+                &mut ChaCha8Rng::seed_from_u64(seed),
+            )
+            .to_vec()
+    }
+
     fn segment(scene: &Scene, sigma: f64) -> (SceneCloud, Vec<SegmentedPlane>) {
         let cloud = SceneCloud::render(scene, 256, 212, sigma, 2);
         let keep: Vec<bool> = cloud.points.iter().map(|p| p.is_valid()).collect();
@@ -847,25 +860,16 @@ mod tests {
                 *p = slope_ipc_types::CloudPoint::INVALID;
             }
         }
-        let keep: Vec<bool> = cloud.points.iter().map(|p| p.is_valid()).collect();
-        let mut seg = PlaneSegmenter::new();
         let cfg = RansacConfig {
             min_plane_points: 200,
             ..RansacConfig::default()
         };
-        let planes = seg
-            .segment(
-                &cloud.view(),
-                &keep,
-                &cfg,
-                &mut ChaCha8Rng::seed_from_u64(1),
-            )
-            .to_vec();
+        let planes = segment_cloud(&cloud, &cfg, 1);
         assert_eq!(planes.len(), 2, "{planes:?}");
         let left = |p: &SegmentedPlane| p.inliers.iter().all(|&i| (i as usize % w) < gap.start);
         let right = |p: &SegmentedPlane| p.inliers.iter().all(|&i| (i as usize % w) >= gap.end);
         assert!(left(&planes[0]) && right(&planes[1]));
-        let measured = keep.iter().filter(|&&k| k).count();
+        let measured = cloud.points.iter().filter(|p| p.is_valid()).count();
         assert_eq!(planes[0].inliers.len() + planes[1].inliers.len(), measured);
         for p in &planes {
             assert!(angle_between_deg(&p.plane.normal, &Vector3::new(0.0, 0.0, -1.0)) < 0.5);
@@ -924,16 +928,8 @@ mod tests {
         // beyond what the final refit moves.
         let scene = Scene::ramp(5.0);
         let cloud = SceneCloud::kinect2(&scene, 2);
-        let keep: Vec<bool> = cloud.points.iter().map(|p| p.is_valid()).collect();
         let cfg = RansacConfig::default();
-        let planes = PlaneSegmenter::new()
-            .segment(
-                &cloud.view(),
-                &keep,
-                &cfg,
-                &mut ChaCha8Rng::seed_from_u64(1),
-            )
-            .to_vec();
+        let planes = segment_cloud(&cloud, &cfg, 1);
         assert!(planes.len() >= 2, "{}", planes.len());
         let t = Threshold {
             base_m: cfg.distance_threshold_m,
