@@ -30,8 +30,10 @@
 //!   on its inliers, rescored, while the score grows). At least 64
 //!   hypotheses, more until the adaptive count for `confidence` is reached.
 //! - *Normals gate the inliers* (as PCL's `SACSegmentationFromNormals`):
-//!   each sample point carries a coarse normal (PCA of every other pixel of
-//!   its 5x5 window, within a few pixel spacings in 3D); a three-point
+//!   each sample point carries a coarse normal: the cross product of the
+//!   central differences two pixels left/right and up/down (the PCA of
+//!   every other pixel of its 5x5 window where one of the four is missing
+//!   or across a depth edge); a three-point
 //!   hypothesis whose points disagree with it, or a sample point more than
 //!   `normal_threshold_deg` off, is not an inlier. A plane that merely
 //!   slices through the edges of a staircase does not win.
@@ -513,7 +515,8 @@ impl PlaneSegmenter {
                     continue;
                 }
                 let n = if need_normals {
-                    grid_normal(cloud, keep, u, v, radius, 2)
+                    central_difference_normal(cloud, keep, u, v, radius)
+                        .or_else(|| grid_normal(cloud, keep, u, v, radius, 2))
                         .unwrap_or_else(|| Vector3::repeat(f64::NAN))
                 } else {
                     Vector3::repeat(f64::NAN)
@@ -682,6 +685,34 @@ impl PlaneSegmenter {
         }
         best.filter(|(s, _)| *s >= 3).map(|(_, p)| p)
     }
+}
+
+/// The normal at pixel `(u, v)` from the cross product of the central
+/// differences `r` pixels left/right and up/down, towards the camera; `None`
+/// when one of the four is missing or more than a few pixel spacings away in
+/// 3D (a depth edge: then the PCA window decides).
+fn central_difference_normal(
+    cloud: &CloudView<'_>,
+    keep: &[bool],
+    u: usize,
+    v: usize,
+    r: usize,
+) -> Option<Vector3<f64>> {
+    let (w, h) = (cloud.width, cloud.height);
+    if u < r || v < r || u + r >= w || v + r >= h {
+        return None;
+    }
+    let centre = to_vec3(&cloud.points[v * w + u]);
+    let reach = 8.0 * r as f64 * centre.z.abs() / cloud.focal_px();
+    let at = |i: usize| {
+        let p = cloud.points.get(i).filter(|p| keep[i] && is_measured(p))?;
+        let p = to_vec3(p);
+        ((p - centre).norm_squared() <= reach * reach).then_some(p)
+    };
+    let dx = at(v * w + u + r)? - at(v * w + u - r)?;
+    let dy = at((v + r) * w + u)? - at((v - r) * w + u)?;
+    let n = dx.cross(&dy).try_normalize(1e-12)?;
+    Some(if n.dot(&centre) > 0.0 { -n } else { n })
 }
 
 /// RMS distance from `plane` of the points summed in `moments` (0 if none).
@@ -966,6 +997,49 @@ mod tests {
         );
         let total: usize = planes.iter().map(|p| p.inliers.len()).sum();
         assert!(a + b < total / 50, "{misplaced:?} of {total}");
+    }
+
+    #[test]
+    fn central_difference_normals_are_exact_on_planes_and_refuse_edges() {
+        // A 16 degree ramp without noise: every sample point with its four
+        // neighbours on one plane gets that plane's normal, facing the
+        // camera; at the image border and across the ground/ramp crease
+        // the difference is refused or still on a plane.
+        let scene = Scene::ramp(16.0);
+        let cloud = SceneCloud::render_with_intrinsics(&scene, 128, 106, 90.0, 0.0, 1);
+        let view = cloud.view();
+        let keep: Vec<bool> = cloud.points.iter().map(|p| p.is_valid()).collect();
+        let normals = [
+            scene.to_camera(&Vector3::z()),
+            scene.to_camera(&scene.surfaces[1].normal),
+        ];
+        let mut exact = 0;
+        for v in 0..cloud.height {
+            for u in 0..cloud.width {
+                let Some(n) = central_difference_normal(&view, &keep, u, v, 2) else {
+                    continue;
+                };
+                assert!(u >= 2 && v >= 2 && u + 2 < cloud.width && v + 2 < cloud.height);
+                let p = to_vec3(&cloud.points[v * cloud.width + u]);
+                assert!(n.dot(&p) < 0.0, "faces the camera");
+                if normals.iter().any(|m| angle_between_deg(&n, m) < 0.05) {
+                    exact += 1;
+                }
+            }
+        }
+        // All but the 2-pixel image border and the rows along the crease
+        // (f32 coordinates: exact to a few thousandths of a degree).
+        let measured = keep.iter().filter(|&&k| k).count();
+        assert!(exact * 100 > measured * 85, "{exact} of {measured}");
+        // A point whose neighbour is a metre behind it (a depth edge).
+        let mut edged = cloud.points.clone();
+        let (u, v) = (64, 80);
+        edged[v * cloud.width + u + 2].z_m += 1.0;
+        let edged_view = CloudView {
+            points: &edged,
+            ..cloud.view()
+        };
+        assert!(central_difference_normal(&edged_view, &keep, u, v, 2).is_none());
     }
 
     #[test]
