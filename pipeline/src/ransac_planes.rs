@@ -205,34 +205,28 @@ impl PlaneSegmenter {
             // The largest 8-connected region of its sample inliers on the
             // sample grid, refitted alone (without the pull of other pieces
             // in the same plane), collects its region once more.
-            let first = self.largest_sample_region(&plane, t, cos_gate);
-            let region = first.and_then(|refit| {
-                self.largest_sample_region(&refit, t, None)
-                    .map(|p| (p, self.region.len()))
-            });
-            let Some((plane_fit, _)) = region.filter(|(_, n)| *n >= min_cells) else {
+            let region = self
+                .largest_sample_region(&plane, t, cos_gate)
+                .and_then(|refit| self.largest_sample_region(&refit, t, None));
+            let Some(plane_fit) = region.filter(|_| self.region.len() >= min_cells) else {
                 // Too small (or only scattered pieces): these sample points
                 // cannot seed a plane; drop them and try again a few times.
                 failures += 1;
                 if failures > MAX_FAILURES {
                     break;
                 }
-                let mut k = 0;
                 for j in 0..self.sample_xyz.len() {
-                    if !is_inlier(
+                    if is_inlier(
                         &plane,
                         &self.sample_xyz[j],
                         &self.sample_normal[j],
                         t,
                         cos_gate,
                     ) {
-                        self.sample_xyz[k] = self.sample_xyz[j];
-                        self.sample_normal[k] = self.sample_normal[j];
-                        self.sample_pixel[k] = self.sample_pixel[j];
-                        k += 1;
+                        self.sample_pixel[j] = NO_SAMPLE;
                     }
                 }
-                self.truncate_sample(k, w);
+                self.compact_sample(w);
                 continue;
             };
             // Take the region's cells out of the sample.
@@ -242,16 +236,7 @@ impl PlaneSegmenter {
                 let j = self.coarse[c as usize] as usize;
                 self.sample_pixel[j] = NO_SAMPLE;
             }
-            let mut k = 0;
-            for j in 0..self.sample_xyz.len() {
-                if self.sample_pixel[j] != NO_SAMPLE {
-                    self.sample_xyz[k] = self.sample_xyz[j];
-                    self.sample_normal[k] = self.sample_normal[j];
-                    self.sample_pixel[k] = self.sample_pixel[j];
-                    k += 1;
-                }
-            }
-            self.truncate_sample(k, w);
+            self.compact_sample(w);
             tracing::trace!(
                 plane = found.len(),
                 cells = self.region.len(),
@@ -415,8 +400,18 @@ impl PlaneSegmenter {
         }
     }
 
-    /// Keeps the first `k` sample points and rebuilds the sample grid.
-    fn truncate_sample(&mut self, k: usize, w: usize) {
+    /// Drops the sample points whose pixel was set to `NO_SAMPLE` and
+    /// rebuilds the sample grid.
+    fn compact_sample(&mut self, w: usize) {
+        let mut k = 0;
+        for j in 0..self.sample_xyz.len() {
+            if self.sample_pixel[j] != NO_SAMPLE {
+                self.sample_xyz[k] = self.sample_xyz[j];
+                self.sample_normal[k] = self.sample_normal[j];
+                self.sample_pixel[k] = self.sample_pixel[j];
+                k += 1;
+            }
+        }
         self.sample_xyz.truncate(k);
         self.sample_normal.truncate(k);
         self.sample_pixel.truncate(k);
@@ -529,8 +524,7 @@ impl PlaneSegmenter {
         self.stride = s;
         self.coarse_w = w.saturating_sub(s / 2).div_ceil(s);
         self.coarse_h = h.saturating_sub(s / 2).div_ceil(s);
-        let k = self.sample_xyz.len();
-        self.truncate_sample(k, w);
+        self.compact_sample(w);
         // Every cell's sample point, kept after the point leaves the sample.
         self.cell_point.clear();
         self.cell_point
