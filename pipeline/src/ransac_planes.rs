@@ -274,12 +274,7 @@ impl PlaneSegmenter {
     /// plane, so it ends; a coplanar piece elsewhere is never adjacent.
     fn relax_cells(&mut self, found: &[Plane], t: Threshold) {
         let (cw, ch) = (self.coarse_w, self.coarse_h);
-        let neighbours = |c: usize| {
-            let (cu, cv) = (c % cw, c / cw);
-            (cv.saturating_sub(1)..(cv + 2).min(ch)).flat_map(move |r| {
-                (cu.saturating_sub(1)..(cu + 2).min(cw)).map(move |q| r * cw + q)
-            })
-        };
+        let neighbours = |c: usize| cell_neighbourhood(c, cw, ch);
         // Work list: the cells on a border between two planes, then the
         // neighbours of every cell that moved.
         self.stack.clear();
@@ -355,20 +350,16 @@ impl PlaneSegmenter {
         self.moments.resize(found.len(), Moments::new());
         // Per coarse cell, the distinct planes of the 3x3 cells around it.
         self.cell_candidates.clear();
-        for cv in 0..ch {
-            for cu in 0..cw {
-                let mut set = ([NO_PLANE; 9], 0u8);
-                for r in cv.saturating_sub(1)..(cv + 2).min(ch) {
-                    for c in cu.saturating_sub(1)..(cu + 2).min(cw) {
-                        let k = self.cell_plane[r * cw + c];
-                        if k != NO_PLANE && !set.0[..set.1 as usize].contains(&k) {
-                            set.0[set.1 as usize] = k;
-                            set.1 += 1;
-                        }
-                    }
+        for c in 0..cw * ch {
+            let mut set = ([NO_PLANE; 9], 0u8);
+            for q in cell_neighbourhood(c, cw, ch) {
+                let k = self.cell_plane[q];
+                if k != NO_PLANE && !set.0[..set.1 as usize].contains(&k) {
+                    set.0[set.1 as usize] = k;
+                    set.1 += 1;
                 }
-                self.cell_candidates.push(set);
             }
+            self.cell_candidates.push(set);
         }
         // The sample column of every pixel column (no division per pixel).
         self.column_cell.clear();
@@ -464,14 +455,10 @@ impl PlaneSegmenter {
             self.stack.push(seed as u32);
             while let Some(c) = self.stack.pop() {
                 size += 1;
-                let (cu, cv) = (c as usize % cw, c as usize / cw);
-                for vv in cv.saturating_sub(1)..(cv + 2).min(ch) {
-                    for uu in cu.saturating_sub(1)..(cu + 2).min(cw) {
-                        let q = vv * cw + uu;
-                        if self.coarse_label[q] == UNLABELLED {
-                            self.coarse_label[q] = label;
-                            self.stack.push(q as u32);
-                        }
+                for q in cell_neighbourhood(c as usize, cw, ch) {
+                    if self.coarse_label[q] == UNLABELLED {
+                        self.coarse_label[q] = label;
+                        self.stack.push(q as u32);
                     }
                 }
             }
@@ -707,6 +694,13 @@ fn central_difference_normal(
     let dy = at((v + r) * w + u)? - at((v - r) * w + u)?;
     let n = dx.cross(&dy).try_normalize(1e-12)?;
     Some(if n.dot(&centre) > 0.0 { -n } else { n })
+}
+
+/// Cell `c` and its 8-connected neighbours on a `cw x ch` grid.
+fn cell_neighbourhood(c: usize, cw: usize, ch: usize) -> impl Iterator<Item = usize> {
+    let (cu, cv) = (c % cw, c / cw);
+    (cv.saturating_sub(1)..(cv + 2).min(ch))
+        .flat_map(move |r| (cu.saturating_sub(1)..(cu + 2).min(cw)).map(move |q| r * cw + q))
 }
 
 /// RMS distance from `plane` of the points summed in `moments` (0 if none).
