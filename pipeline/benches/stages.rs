@@ -11,7 +11,7 @@ use slope_pipeline::cosine_kmeans::CosineKmeans;
 use slope_pipeline::cumulative_angle::cumulative_angle;
 use slope_pipeline::fixtures::{Scene, SceneCloud};
 use slope_pipeline::normals::NormalEstimator;
-use slope_pipeline::pass_through::{Band, PassThrough};
+use slope_pipeline::pass_through::PassThrough;
 use slope_pipeline::ransac_planes::PlaneSegmenter;
 use slope_pipeline::statistical_outlier::StatisticalOutlierFilter;
 use slope_pipeline::{Estimator, EstimatorConfig, SlopeMethod};
@@ -54,24 +54,14 @@ fn stages(c: &mut Criterion) {
     c.bench_function("pass_through/largest_plane", |b| {
         b.iter(|| {
             black_box(
-                pt.filter(
-                    view.points,
-                    &largest,
-                    config.pass_through.max_points,
-                    Band::Surface,
-                )
-                .0
-                .len(),
+                pt.filter(view.points, &largest, config.pass_through.max_points)
+                    .0
+                    .len(),
             )
         })
     });
     let members = pt
-        .filter(
-            view.points,
-            &largest,
-            config.pass_through.max_points,
-            Band::Surface,
-        )
+        .filter(view.points, &largest, config.pass_through.max_points)
         .0
         .to_vec();
 

@@ -12,7 +12,7 @@ use rand_chacha::ChaCha8Rng;
 use slope_pipeline::cloud::angle_between_deg;
 use slope_pipeline::cosine_kmeans::CosineKmeans;
 use slope_pipeline::normals::NormalEstimator;
-use slope_pipeline::pass_through::{Band, PassThrough};
+use slope_pipeline::pass_through::PassThrough;
 use slope_pipeline::plane_selection::{select_planes, GroundSource, PlaneSummary};
 use slope_pipeline::ransac_planes::PlaneSegmenter;
 use slope_pipeline::statistical_outlier::StatisticalOutlierFilter;
@@ -108,18 +108,17 @@ fn main() {
     let sel = select_planes(&summaries, up, &config.selection);
     println!("selection: {sel:?}");
     let Ok(sel) = sel else { return };
-    let mut chosen = vec![("inclined", sel.inclined, Band::Surface)];
+    let mut chosen = vec![("inclined", sel.inclined)];
     if let GroundSource::Plane(g) = sel.ground {
-        chosen.push(("ground", g, Band::Surface));
+        chosen.push(("ground", g));
     }
     let mut means = Vec::new();
-    for (name, idx, band) in chosen {
+    for (name, idx) in chosen {
         let mut pt = PassThrough::new();
         let (members, range) = pt.filter(
             view.points,
             &planes[idx].inliers,
             config.pass_through.max_points,
-            band,
         );
         let members = members.to_vec();
         let mut ne = NormalEstimator::new();
@@ -159,7 +158,7 @@ fn main() {
         }
         if let Some(bp) = slope_pipeline::plane_fit::fit_tls(&bm) {
             println!(
-                "   band-tls vs plane-tls {:.3} deg, kept-mean vs band-tls {:.3}",
+                "   kept-tls vs plane-tls {:.3} deg, kept-mean vs kept-tls {:.3}",
                 angle_between_deg(&bp.normal, &planes[idx].plane.normal),
                 angle_between_deg(&kept, &bp.normal)
             );

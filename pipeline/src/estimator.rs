@@ -18,7 +18,7 @@ use crate::config::EstimatorConfig;
 use crate::cosine_kmeans::CosineKmeans;
 use crate::cumulative_angle::cumulative_angle;
 use crate::normals::NormalEstimator;
-use crate::pass_through::{Band, PassThrough};
+use crate::pass_through::PassThrough;
 use crate::plane_fit::{fit_least_squares, fit_tls, Moments, Plane};
 use crate::plane_selection::{
     axis_distance, select_planes, slope_sign, GroundSource, PlaneSummary,
@@ -367,12 +367,7 @@ fn paper_plane_normals(
 ) -> Option<Vector3<f64>> {
     out.clear();
     let inliers = &segment.inliers;
-    let (members, _) = pass_through.filter(
-        cloud.points,
-        inliers,
-        config.pass_through.max_points,
-        Band::Surface,
-    );
+    let (members, _) = pass_through.filter(cloud.points, inliers, config.pass_through.max_points);
     clock.lap("pass_through");
     // The patch grows with the plane's own noise.
     let normals_config = config.normals.for_plane_noise(segment.rms_m);

@@ -1,16 +1,16 @@
 //! Stage 3, pass-through filter (paper 3.1): a plane with more than
 //! `max_points` (10,000) points is cut down to at most that many.
 //!
-//! **Which points.** The paper names neither the axis nor the range. The
-//! estimator keeps [`Band::Surface`]: a subsample spread *uniformly over the
-//! plane's surface*, each point kept with a probability proportional to the
-//! area its pixel covers there (`z^3` on one plane), by systematic sampling
-//! in pixel order. Why:
+//! **Which points.** The paper names neither the axis nor the range. We
+//! keep a subsample spread *uniformly over the plane's surface*, each point
+//! kept with a probability proportional to the area its pixel covers there
+//! (`z^3` on one plane), by systematic sampling in pixel order. Why:
 //!
 //! - *Not a band.* Real floors are not flat to a degree or two over a frame
 //!   (the Kinect v2 stair frame's floor bends by ~2 degrees between its near
-//!   and far part, at the image edge), so which band is kept moved the
-//!   answer by degrees. The whole plane is what the TLS baseline measures.
+//!   and far part, at the image edge), so which band of rows is kept moved
+//!   the answer by degrees. The whole plane is what the TLS baseline
+//!   measures.
 //! - *Not every n-th pixel.* Near the camera a pixel covers `1/z^3` less
 //!   surface, so a pixel-uniform subsample weights a floor's first metre
 //!   most and its normal comes from there; on the stair frame the kept
@@ -22,11 +22,6 @@
 //!   footprint weights only decide *which pixels*, not where their points
 //!   are, and the normals still take their neighbourhoods from all of the
 //!   plane's points (`NormalEstimator::estimate_with_support`).
-//!
-//! Also available (tests, experiments): [`Band::Middle`] and [`Band::Lower`]
-//! keep a contiguous band of exactly `max_points` ray elevations `y / z`
-//! (the image row; the direction carries no depth noise) centred on the
-//! median or lower; [`Band::Spread`] keeps every `n / max_points`-th pixel.
 
 use slope_ipc_types::CloudPoint;
 
@@ -39,27 +34,6 @@ pub struct PassThroughRange {
     pub max_elevation: f64,
     /// True when points were removed.
     pub cut: bool,
-}
-
-/// Which band of rows a cut plane keeps.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Band {
-    /// Centred on the median elevation (the inclined plane).
-    Middle,
-    /// Centred on the elevation with three quarters of the points above it
-    /// (the ground: nearer the robot and away from the junction with the
-    /// plane ahead, without reaching the image's bottom edge).
-    Lower,
-    /// A uniform subsample of the whole plane's pixels (every
-    /// `n / max_points`-th point in pixel order), for normals whose
-    /// neighbourhoods come from the whole plane
-    /// ([`crate::normals::NormalEstimator::estimate_with_support`]).
-    Spread,
-    /// A subsample uniform over the plane's *surface*: each point is kept
-    /// with a probability proportional to the area its pixel covers on the
-    /// plane, `z^3` (systematic sampling in pixel order, each point at most
-    /// once). The estimator's choice; see the module doc.
-    Surface,
 }
 
 /// Reusable buffers of the filter.
@@ -75,15 +49,15 @@ impl PassThrough {
     }
 
     /// Keeps at most `max_points` of `members` (pixel indices into `points`),
-    /// chosen as `band` says (all of them when there are no more). Members
-    /// without a reading are dropped. Returns the kept indices (in pixel
-    /// order) and the range of ray elevations `y / z` they span.
+    /// uniformly over the plane's surface (all of them when there are no
+    /// more). Members without a reading are dropped. Returns the kept
+    /// indices (in pixel order) and the range of ray elevations `y / z`
+    /// they span.
     pub fn filter(
         &mut self,
         points: &[CloudPoint],
         members: &[u32],
         max_points: usize,
-        band: Band,
     ) -> (&[u32], PassThroughRange) {
         self.keyed.clear();
         for &i in members {
@@ -95,34 +69,7 @@ impl PassThrough {
         }
         let cut = self.keyed.len() > max_points;
         if cut {
-            let by_depth = |a: &(f32, u32), b: &(f32, u32)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1));
-            if max_points == 0 {
-                self.keyed.clear();
-            } else if band == Band::Spread {
-                // Every (n / max_points)-th member in pixel order: a uniform
-                // subsample of the whole plane.
-                let n = self.keyed.len();
-                self.keyed.sort_unstable_by_key(|&(_, i)| i);
-                for k in 0..max_points {
-                    self.keyed[k] = self.keyed[k * n / max_points];
-                }
-                self.keyed.truncate(max_points);
-            } else if band == Band::Surface {
-                surface_sample(points, &mut self.keyed, max_points);
-            } else {
-                let lo = match band {
-                    Band::Middle => (self.keyed.len() - max_points) / 2,
-                    Band::Lower => (self.keyed.len() - max_points) * 3 / 4,
-                    Band::Spread | Band::Surface => 0,
-                };
-                if lo > 0 {
-                    self.keyed.select_nth_unstable_by(lo, by_depth);
-                }
-                let upper = &mut self.keyed[lo..];
-                upper.select_nth_unstable_by(max_points - 1, by_depth);
-                self.keyed.drain(..lo);
-                self.keyed.truncate(max_points);
-            }
+            surface_sample(points, &mut self.keyed, max_points);
         }
         let (mut lo, mut hi) = (f64::NAN, f64::NAN);
         for &(z, _) in &self.keyed {
@@ -161,7 +108,7 @@ fn surface_sample(points: &[CloudPoint], keyed: &mut Vec<(f32, u32)>, max_points
         z * z * z
     };
     let total: f64 = keyed.iter().map(|&(_, i)| footprint(i)).sum();
-    if !(total.is_finite() && total > 0.0) {
+    if max_points == 0 || !(total.is_finite() && total > 0.0) {
         keyed.truncate(max_points);
         return;
     }
@@ -196,50 +143,6 @@ mod tests {
     }
 
     #[test]
-    fn keeps_the_median_band_exactly() {
-        // Elevations 0..1 shuffled deterministically.
-        let depths: Vec<f32> = (0..100).map(|i| ((i * 37) % 100) as f32 * 0.01).collect();
-        let pts = points_at_elevations(&depths);
-        let members: Vec<u32> = (0..100).collect();
-        let mut pt = PassThrough::new();
-        let (kept, range) = pt.filter(&pts, &members, 30, Band::Middle);
-        assert_eq!(kept.len(), 30);
-        assert!(range.cut);
-        // 100 points, 30 kept: ranks 35..65, elevations 0.35..0.64.
-        assert!((range.min_elevation - 0.35).abs() < 1e-6, "{range:?}");
-        assert!((range.max_elevation - 0.64).abs() < 1e-5, "{range:?}");
-        // Brute force: the kept set is exactly ranks 35..65 of a full sort.
-        // Noise along the rays (any depth) changes nothing.
-        let mut noisy = pts.clone();
-        for (k, p) in noisy.iter_mut().enumerate() {
-            let s = 1.0 + 0.01 * (k % 7) as f32;
-            p.x_m *= s;
-            p.y_m *= s;
-            p.z_m *= s;
-        }
-        let mut pt2 = PassThrough::new();
-        assert_eq!(pt2.filter(&noisy, &members, 30, Band::Middle).0, kept);
-        let mut sorted: Vec<(f32, u32)> =
-            members.iter().map(|&i| (depths[i as usize], i)).collect();
-        sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let mut want: Vec<u32> = sorted[35..65].iter().map(|x| x.1).collect();
-        want.sort_unstable();
-        assert_eq!(kept, &want[..]);
-        // The lower band: 70 points left out, 52 of them above.
-        let mut pt3 = PassThrough::new();
-        let (bottom, _) = pt3.filter(&pts, &members, 30, Band::Lower);
-        let mut want_bottom: Vec<u32> = sorted[52..82].iter().map(|x| x.1).collect();
-        want_bottom.sort_unstable();
-        assert_eq!(bottom, &want_bottom[..]);
-        // The spread: every (100 / 30)-th member in pixel order.
-        let mut pt4 = PassThrough::new();
-        let (spread, range) = pt4.filter(&pts, &members, 30, Band::Spread);
-        let want_spread: Vec<u32> = (0..30).map(|k| k * 100 / 30).collect();
-        assert_eq!(spread, &want_spread[..]);
-        assert!(range.cut);
-    }
-
-    #[test]
     fn surface_sample_is_uniform_over_area() {
         // 1000 pixels at 1 m and 1000 at 2 m on one plane: a far pixel
         // covers 8 times the area, so of 900 kept, 100 are near, 800 far.
@@ -255,7 +158,7 @@ mod tests {
         }
         let members: Vec<u32> = (0..2000).collect();
         let mut pt = PassThrough::new();
-        let (kept, range) = pt.filter(&pts, &members, 900, Band::Surface);
+        let (kept, range) = pt.filter(&pts, &members, 900);
         assert!(range.cut);
         let near = kept.iter().filter(|&&i| i % 2 == 0).count();
         let far = kept.len() - near;
@@ -264,7 +167,7 @@ mod tests {
         // Every member at most once, in pixel order.
         assert!(kept.windows(2).all(|w| w[0] < w[1]));
         // A cap above the count keeps everything.
-        assert_eq!(pt.filter(&pts, &members, 2000, Band::Surface).0.len(), 2000);
+        assert_eq!(pt.filter(&pts, &members, 2000).0.len(), 2000);
     }
 
     #[test]
@@ -272,15 +175,15 @@ mod tests {
         let pts = points_at_elevations(&[2.0; 50]);
         let members: Vec<u32> = (0..50).collect();
         let mut pt = PassThrough::new();
-        let (kept, range) = pt.filter(&pts, &members, 50, Band::Middle);
+        let (kept, range) = pt.filter(&pts, &members, 50);
         assert_eq!(kept.len(), 50);
         assert!(!range.cut);
-        let (kept, range) = pt.filter(&pts, &members, 20, Band::Lower);
+        let (kept, range) = pt.filter(&pts, &members, 20);
         assert_eq!(kept.len(), 20);
         assert!(range.cut);
         let mut bad = pts.clone();
         bad[3] = CloudPoint::INVALID;
-        let (kept, _) = pt.filter(&bad, &[3, 4, 999], 10, Band::Middle);
+        let (kept, _) = pt.filter(&bad, &[3, 4, 999], 10);
         assert_eq!(kept, &[4]);
     }
 }
