@@ -107,7 +107,7 @@ fn stages(c: &mut Criterion) {
     c.bench_function("cumulative_angle/100_draws", |b| {
         b.iter(|| {
             let mut rng = ChaCha8Rng::seed_from_u64(0);
-            black_box(cumulative_angle(&normals, &ground, 100, &mut rng))
+            black_box(cumulative_angle(&normals, &ground, 100, None, &mut rng))
         })
     });
 

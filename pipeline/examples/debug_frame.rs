@@ -13,8 +13,9 @@ use slope_pipeline::cloud::angle_between_deg;
 use slope_pipeline::cosine_kmeans::CosineKmeans;
 use slope_pipeline::normals::NormalEstimator;
 use slope_pipeline::pass_through::PassThrough;
-use slope_pipeline::plane_selection::{select_planes, GroundSource, PlaneSummary};
 use slope_pipeline::ransac_planes::PlaneSegmenter;
+use slope_pipeline::ransac_planes::Threshold;
+use slope_pipeline::selection::{plane_quality, select_planes, Ground, PlaneSummary};
 use slope_pipeline::statistical_outlier::StatisticalOutlierFilter;
 use slope_pipeline::EstimatorConfig;
 
@@ -37,17 +38,19 @@ fn main() {
     let planes = seg.segment(&view, &keep, &config.ransac, &mut rng).to_vec();
     let up = view.mount.up_vector().map(Vector3::from);
     let w = view.width;
+    let threshold = Threshold::of(&config.ransac);
     let summaries: Vec<PlaneSummary> = planes
         .iter()
         .map(|p| PlaneSummary {
             plane: p.plane,
             inliers: p.inliers.len(),
-            bottom_inliers: p
+            bottom_pixels: p
                 .inliers
                 .iter()
                 .filter(|&&i| i as usize / w >= view.height - view.height / 3)
                 .count(),
             centroid: p.centroid,
+            quality: plane_quality(&view, &p.plane, &p.inliers, &threshold),
         })
         .collect();
     for (i, s) in summaries.iter().enumerate() {
@@ -59,9 +62,10 @@ fn main() {
                     let (u, v) = (p as usize % w, p as usize / w);
                     (b.0.min(u), b.1.min(v), b.2.max(u), b.3.max(v))
                 });
+        let q = &s.quality;
         println!(
-            "plane {i}: n [{:+.4} {:+.4} {:+.4}] d {:.3} inliers {} bottom {} centroid [{:.2} {:.2} {:.2}] up-angle {:.2} bbox u {u0}..{u1} v {v0}..{v1}",
-            s.plane.normal.x, s.plane.normal.y, s.plane.normal.z, s.plane.d, s.inliers, s.bottom_inliers,
+            "plane {i}: n [{:+.4} {:+.4} {:+.4}] d {:.3} inliers {} rms {:.4} rel {:.2} area {:.2} border {:.2} centroid [{:.2} {:.2} {:.2}] up-angle {:.2} bbox u {u0}..{u1} v {v0}..{v1}",
+            s.plane.normal.x, s.plane.normal.y, s.plane.normal.z, s.plane.d, s.inliers, q.rms_m, q.relative_rms, q.area_m2, q.border_fraction,
             s.centroid.x, s.centroid.y, s.centroid.z,
             up.map_or(f64::NAN, |u| angle_between_deg(&s.plane.normal, &u))
         );
@@ -105,12 +109,12 @@ fn main() {
         .write_image_data(&rgb)
         .expect("png");
     println!("labels in {} (plane k = palette k: red, green, yellow, blue, orange, purple, cyan, magenta, lime, pink)", out.display());
-    let sel = select_planes(&summaries, up, &config.selection);
+    let sel = select_planes(&summaries, up, Some(view.mount.height_m), &config.selection);
     println!("selection: {sel:?}");
     let Ok(sel) = sel else { return };
     let mut chosen = vec![("inclined", sel.inclined)];
-    if let GroundSource::Plane(g) = sel.ground {
-        chosen.push(("ground", g));
+    if let Ground::Planes(g) = &sel.ground {
+        chosen.push(("ground", g[0]));
     }
     let mut means = Vec::new();
     for (name, idx) in chosen {

@@ -156,7 +156,7 @@ impl Default for RansacConfig {
             normal_threshold_deg: 30.0,
             min_plane_points: 800,
             min_remaining_fraction: 0.03,
-            max_planes: 10,
+            max_planes: 24,
         }
     }
 }
@@ -264,32 +264,56 @@ pub struct CumulativeConfig {
     /// random error of 10/sqrt(100) = 1 degree at 100 draws, so the default
     /// is 1000 (0.3 degrees, 25 microseconds).
     pub draws: usize,
+    /// Measure each pair's angle about the rotation axis between the two
+    /// planes' mean normals (signed), which removes the upward bias of
+    /// unsigned angles between noisy normals (`cumulative_angle.rs`); false:
+    /// the unsigned angle of each pair, as the paper.
+    pub about_axis: bool,
 }
 
 impl Default for CumulativeConfig {
     fn default() -> Self {
-        Self { draws: 1000 }
+        Self {
+            draws: 1000,
+            about_axis: true,
+        }
     }
 }
 
-/// Which plane is the ground and which the inclined plane
-/// (`plane_selection.rs`).
+/// Which plane is the ground and which the inclined plane (`selection/`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SelectionConfig {
+    /// A plane is flat (a measurement surface) when the RMS of its inliers'
+    /// distances, each divided by its RANSAC inlier threshold, is at most
+    /// this: a flat surface scores its noise over the threshold (real
+    /// Kinect floors and walls 0.1-0.3), a surface that fills the band
+    /// evenly 0.58.
+    pub max_relative_rms: f64,
     /// With a mount: a ground candidate's normal is within this of the
     /// mount's up vector, degrees.
     pub ground_max_tilt_deg: f64,
     /// Without a mount: a ground candidate's normal is within this of the
     /// camera's up (-y), degrees.
     pub unmounted_ground_max_tilt_deg: f64,
-    /// Planes whose normals are within this of each other count as parallel
-    /// (treads, floor, table tops), degrees.
+    /// The ground has at least this many pixels...
+    pub ground_min_pixels: usize,
+    /// ...and covers at least this much surface, square metres.
+    pub ground_min_area_m2: f64,
+    /// With a known mount height: the ground lies within this of it, metres;
+    /// no level plane does: the mount's plane is the ground.
+    pub ground_height_tolerance_m: f64,
+    /// A level plane parallel to the ground whose centroid is within this of
+    /// the ground plane is a piece of the ground, metres.
+    pub coplanar_tolerance_m: f64,
+    /// Planes whose normals are within this of each other are parallel
+    /// (treads, floor, table tops; real treads and floors differ by up to
+    /// 3.5 degrees as measured); an inclined plane differs from the ground
+    /// by more, degrees.
     pub parallel_tolerance_deg: f64,
-    /// An inclined plane differs from the ground by at least this, degrees
-    /// (planes closer to parallel are treads, tables or the ground itself:
-    /// real treads and floors differ by up to 2-3 degrees as measured).
-    pub min_slope_deg: f64,
+    /// An inclined plane's normal is at most this from the ground's: beyond
+    /// 90 a surface faces down (a ceiling, an overhang), degrees.
+    pub max_slope_deg: f64,
     /// An inclined plane's horizontal normal is within this of the forward
     /// axis (a ramp ahead or a wall faced), not beside the robot, degrees.
     pub max_heading_deg: f64,
@@ -301,10 +325,15 @@ pub struct SelectionConfig {
 impl Default for SelectionConfig {
     fn default() -> Self {
         Self {
+            max_relative_rms: 0.45,
             ground_max_tilt_deg: 15.0,
             unmounted_ground_max_tilt_deg: 50.0,
+            ground_min_pixels: 2000,
+            ground_min_area_m2: 0.1,
+            ground_height_tolerance_m: 0.15,
+            coplanar_tolerance_m: 0.05,
             parallel_tolerance_deg: 4.0,
-            min_slope_deg: 3.5,
+            max_slope_deg: 100.0,
             max_heading_deg: 50.0,
             min_relative_support: 0.25,
         }
@@ -447,7 +476,27 @@ impl EstimatorConfig {
             s.unmounted_ground_max_tilt_deg,
         )?;
         angle("selection.parallel_tolerance_deg", s.parallel_tolerance_deg)?;
-        angle("selection.min_slope_deg", s.min_slope_deg)?;
+        angle("selection.max_slope_deg", s.max_slope_deg)?;
+        if s.max_slope_deg <= s.parallel_tolerance_deg {
+            return Err(invalid(
+                "selection.max_slope_deg",
+                s.max_slope_deg,
+                "must be larger than selection.parallel_tolerance_deg",
+            ));
+        }
+        for (key, value) in [
+            ("selection.max_relative_rms", s.max_relative_rms),
+            ("selection.ground_min_area_m2", s.ground_min_area_m2),
+            (
+                "selection.ground_height_tolerance_m",
+                s.ground_height_tolerance_m,
+            ),
+            ("selection.coplanar_tolerance_m", s.coplanar_tolerance_m),
+        ] {
+            if !(value.is_finite() && value >= 0.0) {
+                return Err(invalid(key, value, "must be a finite number >= 0"));
+            }
+        }
         angle("selection.max_heading_deg", s.max_heading_deg)?;
         fraction("selection.min_relative_support", s.min_relative_support)?;
         Ok(())

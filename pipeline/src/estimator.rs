@@ -16,14 +16,14 @@ use slope_ipc_types::{EstimateStatus, SlopeEstimate, SlopeMethod};
 use crate::cloud::{angle_between_deg, is_measured, to_vec3, CloudView};
 use crate::config::EstimatorConfig;
 use crate::cosine_kmeans::CosineKmeans;
-use crate::cumulative_angle::cumulative_angle;
+use crate::cumulative_angle::{cumulative_angle, rotation_axis};
 use crate::normals::NormalEstimator;
 use crate::pass_through::PassThrough;
 use crate::plane_fit::{fit_least_squares, fit_tls, Moments, Plane};
-use crate::plane_selection::{
-    axis_distance, select_planes, slope_sign, GroundSource, PlaneSummary,
+use crate::ransac_planes::{PlaneSegmenter, Threshold};
+use crate::selection::{
+    axis_distance, plane_quality, select_planes, slope_sign, Ground, PlaneSummary,
 };
-use crate::ransac_planes::{PlaneSegmenter, SegmentedPlane};
 use crate::statistical_outlier::StatisticalOutlierFilter;
 
 /// A fitted plane in the estimate.
@@ -151,6 +151,8 @@ pub struct Estimator {
     keep: Vec<bool>,
     segmenter: PlaneSegmenter,
     summaries: Vec<PlaneSummary>,
+    /// Inlier pixels of every segment of the ground, in pixel order.
+    ground_pixels: Vec<u32>,
     pass_through: PassThrough,
     normals: NormalEstimator,
     kmeans: CosineKmeans,
@@ -166,6 +168,7 @@ impl Estimator {
             keep: Vec::new(),
             segmenter: PlaneSegmenter::new(),
             summaries: Vec::new(),
+            ground_pixels: Vec::new(),
             pass_through: PassThrough::new(),
             normals: NormalEstimator::new(),
             kmeans: CosineKmeans::new(),
@@ -212,24 +215,30 @@ impl Estimator {
             .segmenter
             .segment(cloud, &self.keep, &self.config.ransac, &mut rng);
         clock.lap("ransac");
-        // Plane selection.
-        let w = cloud.width;
-        let bottom_row = cloud.height - cloud.height / 3;
+        // Plane quality and selection.
+        let threshold = Threshold::of(&self.config.ransac);
+        let bottom_start = (cloud.height - cloud.height / 3) * cloud.width;
         self.summaries.clear();
         self.summaries.extend(planes.iter().map(|p| {
             PlaneSummary {
                 plane: p.plane,
                 inliers: p.inliers.len(),
-                bottom_inliers: p
+                bottom_pixels: p
                     .inliers
                     .iter()
-                    .filter(|&&i| i as usize / w >= bottom_row)
+                    .filter(|&&i| i as usize >= bottom_start)
                     .count(),
                 centroid: p.centroid,
+                quality: plane_quality(cloud, &p.plane, &p.inliers, &threshold),
             }
         }));
         let mount_up = cloud.mount.up_vector().map(Vector3::from);
-        let selection = select_planes(&self.summaries, mount_up, &self.config.selection);
+        let selection = select_planes(
+            &self.summaries,
+            mount_up,
+            Some(cloud.mount.height_m),
+            &self.config.selection,
+        );
         clock.lap("selection");
         let selection = match selection {
             Ok(s) => s,
@@ -237,16 +246,39 @@ impl Estimator {
         };
         let planes = self.segmenter.planes();
         let inclined_seg = &planes[selection.inclined];
-        let ground_seg = match selection.ground {
-            GroundSource::Plane(g) => Some(&planes[g]),
-            GroundSource::Mount => None,
+        // The ground's segments together: pixels, centroid and RMS.
+        let ground_seg = match &selection.ground {
+            Ground::Planes(members) => {
+                self.ground_pixels.clear();
+                let mut weighted = (Vector3::zeros(), 0.0);
+                for &k in members {
+                    let p = &planes[k];
+                    self.ground_pixels.extend_from_slice(&p.inliers);
+                    let n = p.inliers.len() as f64;
+                    weighted.0 += p.centroid * n;
+                    weighted.1 += p.rms_m.powi(2) * n;
+                }
+                self.ground_pixels.sort_unstable();
+                let n = self.ground_pixels.len().max(1) as f64;
+                Some(PlaneSegment {
+                    inliers: &self.ground_pixels,
+                    centroid: weighted.0 / n,
+                    rms_m: (weighted.1 / n).sqrt(),
+                })
+            }
+            Ground::Mount => None,
+        };
+        let inclined_seg = PlaneSegment {
+            inliers: &inclined_seg.inliers,
+            centroid: inclined_seg.centroid,
+            rms_m: inclined_seg.rms_m,
         };
         let fits = match method {
             SlopeMethod::Paper => {
                 let cfg = &self.config;
                 let Some(incl) = paper_plane_normals(
                     cloud,
-                    inclined_seg,
+                    &inclined_seg,
                     cfg,
                     &mut self.pass_through,
                     &mut self.normals,
@@ -256,7 +288,7 @@ impl Estimator {
                 ) else {
                     return Estimate::failed(EstimateStatus::NoInclinedPlane, method);
                 };
-                let ground = match ground_seg {
+                let ground = match &ground_seg {
                     Some(g) => {
                         let Some(n) = paper_plane_normals(
                             cloud,
@@ -278,10 +310,16 @@ impl Estimator {
                         None
                     }
                 };
+                let axis = cfg
+                    .cumulative
+                    .about_axis
+                    .then(|| rotation_axis(&ground.unwrap_or(selection.up), &incl))
+                    .flatten();
                 let Some(summary) = cumulative_angle(
                     &self.inclined_normals,
                     &self.ground_normals,
                     cfg.cumulative.draws,
+                    axis.as_ref(),
                     &mut rng,
                 ) else {
                     return Estimate::failed(EstimateStatus::NoInclinedPlane, method);
@@ -289,7 +327,9 @@ impl Estimator {
                 clock.lap("cumulative");
                 let incl_plane = Plane::from_point_normal(&inclined_seg.centroid, &incl);
                 let ground_plane = ground.and_then(|n| {
-                    ground_seg.and_then(|g| Plane::from_point_normal(&g.centroid, &n))
+                    ground_seg
+                        .as_ref()
+                        .and_then(|g| Plane::from_point_normal(&g.centroid, &n))
                 });
                 (
                     incl_plane,
@@ -314,8 +354,8 @@ impl Estimator {
                     };
                     plane.map(|p| p.oriented_towards(&Vector3::zeros()))
                 };
-                let incl_plane = fit(&inclined_seg.inliers);
-                let ground_plane = ground_seg.and_then(|g| fit(&g.inliers));
+                let incl_plane = fit(inclined_seg.inliers);
+                let ground_plane = ground_seg.as_ref().and_then(|g| fit(g.inliers));
                 clock.lap("fit");
                 let up = ground_plane.map_or(selection.up, |g| g.normal);
                 let angle = incl_plane.map_or(f64::NAN, |p| angle_between_deg(&p.normal, &up));
@@ -338,10 +378,12 @@ impl Estimator {
             slope_std_deg: std,
             samples,
             distance_m: axis_distance(&incl_plane),
-            ground: ground_plane.zip(ground_seg).map(|(p, g)| PlaneEstimate {
-                coefficients: p.coefficients(),
-                inliers: u32::try_from(g.inliers.len()).unwrap_or(u32::MAX),
-            }),
+            ground: ground_plane
+                .zip(ground_seg.as_ref())
+                .map(|(p, g)| PlaneEstimate {
+                    coefficients: p.coefficients(),
+                    inliers: u32::try_from(g.inliers.len()).unwrap_or(u32::MAX),
+                }),
             inclined: Some(PlaneEstimate {
                 coefficients: incl_plane.coefficients(),
                 inliers: u32::try_from(inclined_seg.inliers.len()).unwrap_or(u32::MAX),
@@ -352,12 +394,20 @@ impl Estimator {
     }
 }
 
+/// The pixels of a chosen plane (one RANSAC plane, or the ground's
+/// segments together), their centroid and RMS distance from their plane.
+struct PlaneSegment<'a> {
+    inliers: &'a [u32],
+    centroid: Vector3<f64>,
+    rms_m: f64,
+}
+
 /// Pass-through, normals and cosine k-means for one plane: fills `out` with
 /// the dominant cluster's normals and returns its (unit) mean.
 #[allow(clippy::too_many_arguments)]
 fn paper_plane_normals(
     cloud: &CloudView<'_>,
-    segment: &SegmentedPlane,
+    segment: &PlaneSegment<'_>,
     config: &EstimatorConfig,
     pass_through: &mut PassThrough,
     normals: &mut NormalEstimator,
@@ -366,7 +416,7 @@ fn paper_plane_normals(
     clock: &mut Stopwatch,
 ) -> Option<Vector3<f64>> {
     out.clear();
-    let inliers = &segment.inliers;
+    let inliers = segment.inliers;
     let (members, _) = pass_through.filter(cloud.points, inliers, config.pass_through.max_points);
     clock.lap("pass_through");
     // The patch grows with the plane's own noise.

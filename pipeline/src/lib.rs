@@ -14,7 +14,7 @@
 //! | `cosine_kmeans.rs` | 5. cosine k-means, dominant cluster |
 //! | `cumulative_angle.rs` | 6. cumulative averaging of the angle |
 //! | `plane_fit.rs` | TLS and least-squares plane fits (baselines) |
-//! | `plane_selection.rs` | which plane is the ground, which the inclined plane; sign, distance |
+//! | `selection/` | plane quality; which plane is the ground, which the inclined plane; sign, distance |
 //! | `estimator.rs` | orchestration and timings |
 
 // `!(x > 0.0)` is how this crate says "not a positive number, NaN
@@ -31,8 +31,8 @@ pub mod fixtures;
 pub mod normals;
 pub mod pass_through;
 pub mod plane_fit;
-pub mod plane_selection;
 pub mod ransac_planes;
+pub mod selection;
 pub mod statistical_outlier;
 
 pub use cloud::CloudView;

@@ -171,10 +171,7 @@ impl PlaneSegmenter {
         let s2 = (self.stride as f64).powi(2);
         let min_cells = ((config.min_plane_points as f64 / s2).ceil() as usize).max(3);
         let mut failures = 0;
-        let t = Threshold {
-            base_m: config.distance_threshold_m,
-            per_m2: config.distance_threshold_per_m2,
-        };
+        let t = Threshold::of(config);
         let cos_gate = if config.normal_threshold_deg > 0.0 && config.normal_threshold_deg < 90.0 {
             Some(config.normal_threshold_deg.to_radians().cos())
         } else {
@@ -556,10 +553,7 @@ impl PlaneSegmenter {
                     .map(|k| ((k * SCRAMBLE) % SCORE_POINTS * n / SCORE_POINTS) as u32),
             );
         }
-        let t = Threshold {
-            base_m: config.distance_threshold_m,
-            per_m2: config.distance_threshold_per_m2,
-        };
+        let t = Threshold::of(config);
         let mut best: Option<(usize, Plane)> = None;
         let mut needed = config.max_iterations;
         let mut it = 0;
@@ -713,14 +707,23 @@ fn rms_distance(moments: &Moments, plane: &Plane) -> f64 {
 
 /// The inlier distance at a point: `max(base, per_m2 * z^2)`.
 #[derive(Debug, Clone, Copy)]
-struct Threshold {
+pub struct Threshold {
     base_m: f64,
     per_m2: f64,
 }
 
 impl Threshold {
+    /// The threshold of `config`.
+    pub fn of(config: &RansacConfig) -> Self {
+        Self {
+            base_m: config.distance_threshold_m,
+            per_m2: config.distance_threshold_per_m2,
+        }
+    }
+
+    /// The inlier distance at point `p`, metres.
     #[inline]
-    fn at(&self, p: &Vector3<f64>) -> f64 {
+    pub fn at(&self, p: &Vector3<f64>) -> f64 {
         self.base_m.max(self.per_m2 * p.z * p.z)
     }
 }
@@ -950,10 +953,7 @@ mod tests {
         let cfg = RansacConfig::default();
         let planes = segment_cloud(&cloud, &cfg, 1);
         assert!(planes.len() >= 2, "{}", planes.len());
-        let t = Threshold {
-            base_m: cfg.distance_threshold_m,
-            per_m2: cfg.distance_threshold_per_m2,
-        };
+        let t = Threshold::of(&cfg);
         // Per plane: pixels nearer (and within the threshold of) another
         // plane than their own.
         let misplaced: Vec<usize> = planes

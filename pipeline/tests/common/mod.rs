@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 
 use slope_ipc_types::{CloudPoint, Intrinsics, Mount};
 use slope_pipeline::CloudView;
+use slope_sensor::projection::Projector;
 use slope_sensor::recording::Recording as Reader;
 
 /// One opened recording.
@@ -56,18 +57,74 @@ impl Recording {
 
     /// Decodes and projects frame `k`.
     pub fn frame(&self, k: usize) -> Result<Frame, String> {
+        self.frame_as(k, View::AsRecorded)
+    }
+
+    /// Decodes frame `k`, mirrors it left-right when asked, and projects it.
+    pub fn frame_as(&self, k: usize, view: View) -> Result<Frame, String> {
         let entry = self.reader.frames().get(k).ok_or("no such frame")?;
-        let depth = self.reader.read_depth(entry).map_err(|e| e.to_string())?;
+        let mut depth = self
+            .reader
+            .read_depth(entry)
+            .map_err(|e| e.to_string())?
+            .data;
         let projector = self.reader.projector();
+        let mut mount = self.reader.mount();
+        let projector = match view {
+            View::AsRecorded => projector,
+            View::Mirrored => {
+                let (w, h) = (projector.width(), projector.height());
+                mount = mirror_mount(mount);
+                mirror_rows(&mut depth, w as usize);
+                let mut intrinsics = projector.intrinsics();
+                intrinsics.cx = f64::from(w) - 1.0 - intrinsics.cx;
+                Projector::new(w, h, intrinsics, projector.unit_m())
+            }
+        };
         let mut points = vec![CloudPoint::INVALID; projector.len()];
-        projector.project_into(&depth.data, None, &mut points);
+        projector.project_into(&depth, None, &mut points);
         Ok(Frame {
             points,
             width: projector.width() as usize,
             height: projector.height() as usize,
             intrinsics: projector.intrinsics(),
-            mount: self.reader.mount(),
+            mount,
         })
+    }
+}
+
+/// A frame as recorded or as its left-right mirror image.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum View {
+    AsRecorded,
+    /// Rows reversed, `cx -> W - 1 - cx`, roll negated (the recording
+    /// format's rule for data kept in libfreenect2's pixel order).
+    Mirrored,
+}
+
+impl View {
+    pub const BOTH: [View; 2] = [View::AsRecorded, View::Mirrored];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            View::AsRecorded => "as recorded",
+            View::Mirrored => "mirrored",
+        }
+    }
+}
+
+/// Reverses every row of a row-major image `width` wide.
+pub fn mirror_rows<T>(image: &mut [T], width: usize) {
+    for row in image.chunks_exact_mut(width) {
+        row.reverse();
+    }
+}
+
+/// The mount of the mirror image: the roll changes sign.
+pub fn mirror_mount(mount: Mount) -> Mount {
+    Mount {
+        roll_deg: -mount.roll_deg,
+        ..mount
     }
 }
 
@@ -87,4 +144,25 @@ pub fn shared_data(name: &str) -> Option<PathBuf> {
     );
     println!("note: {} is absent, skipping", dir.display());
     None
+}
+
+/// The left-right mirror image of an organised cloud: rows reversed, x
+/// negated, `cx -> W - 1 - cx`, roll negated. The same as mirroring the depth
+/// image and projecting it ([`Recording::frame_as`]).
+pub fn mirror_cloud(
+    points: &[CloudPoint],
+    width: usize,
+    intrinsics: Intrinsics,
+    mount: Mount,
+) -> (Vec<CloudPoint>, Intrinsics, Mount) {
+    let mut mirrored: Vec<CloudPoint> = points
+        .iter()
+        .map(|p| CloudPoint { x_m: -p.x_m, ..*p })
+        .collect();
+    mirror_rows(&mut mirrored, width);
+    let intrinsics = Intrinsics {
+        cx: width as f64 - 1.0 - intrinsics.cx,
+        ..intrinsics
+    };
+    (mirrored, intrinsics, mirror_mount(mount))
 }

@@ -27,8 +27,8 @@ Examples:
   # A wall 2 m ahead, seen at a 20° yaw, driving towards it at 0.3 m/s
   slope-synth --slope 90 --distance 2 --yaw 20 --speed 0.3 -o /tmp/wall
 
-  # Everything else (boxes, side walls, sensor parameters) from a scene file;
-  # flags given on the command line override the file
+  # Everything else (boxes, side walls, tables, a ceiling, soft blocks, sensor
+  # parameters) from a scene file; flags given on the command line override it
   slope-synth --scene scene.toml --seed 3 -o /tmp/scene
 
 Conventions: world x right, y forward, z up; camera x right, y down, z forward.

@@ -7,6 +7,8 @@
 //! through (the Cyrus–Beck / slab clip), so the first surface a ray meets in
 //! a scene is the smallest entry parameter over all solids. No tessellation,
 //! no tolerance: the hit lies on the analytic plane up to f64 rounding.
+//! The one exception, the bumpy soft block, is ray-marched in
+//! `soft_solid.rs` and returns the same [`Hit`].
 
 use nalgebra::{Point3, Vector3};
 
@@ -36,15 +38,29 @@ pub enum SurfaceKind {
     Wall,
     /// A box on the ground (`[[boxes]]`), indexed.
     Box,
+    /// The top slab of a table (`[[tables]]`), indexed; faces are [`BoxFace`]s.
+    Table,
+    /// A leg of a table, indexed by its table; face `6 * leg + BoxFace`, legs
+    /// numbered near-left, near-right, far-left, far-right (table frame).
+    TableLeg,
+    /// The ceiling (`[ceiling]`): its underside is [`BoxFace::Bottom`], the
+    /// vertical ends of an overhang [`BoxFace::Near`] and [`BoxFace::Far`].
+    Ceiling,
+    /// A block with bumpy top and sides (`[[soft_blocks]]`), indexed; faces
+    /// are [`BoxFace`]s. Its top and sides are not planar.
+    SoftBlock,
 }
 
-/// One planar surface of the scene: a kind, which object of that kind
-/// (walls and boxes are numbered in scene order), and which face of it.
+/// One surface of the scene: a kind, which object of that kind (walls,
+/// boxes, tables and soft blocks are numbered in scene order), and which
+/// face of it. Every surface is planar except the top and sides of a soft
+/// block.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct Surface {
     pub kind: SurfaceKind,
     pub index: u16,
-    /// Which plane of the object: for walls and boxes see [`BoxFace`]; the
+    /// Which face of the object: for walls, boxes, tables, ceilings and
+    /// soft blocks see [`BoxFace`] (table legs: `6 * leg + BoxFace`); the
     /// two sides of a ramp are 0 (left) and 1 (right); a ramp's back is 1
     /// and its underside 0. Ground, ramp and landing have face 0.
     pub face: u8,
@@ -66,7 +82,8 @@ impl Surface {
     }
 }
 
-/// The faces of a box-shaped solid (walls and boxes), for [`Surface::face`].
+/// The faces of a box-shaped solid (walls, boxes, tables, table legs,
+/// soft blocks; the ceiling's underside and ends), for [`Surface::face`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[repr(u8)]
 pub enum BoxFace {

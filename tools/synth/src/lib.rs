@@ -1,14 +1,19 @@
 //! `slope-synth`: a Kinect v2 scene simulator. It ray-casts scenes (ground,
 //! an ascending or descending inclined plane with an optional landing, side
-//! walls, boxes) exactly through a pinhole depth camera, applies a sensor
-//! model (axial and lateral noise, flying pixels, multipath, dropouts,
-//! range limits, quantisation, pose jitter) and writes recordings in the
-//! format of `shared/spec/recording-format.md` with exact ground truth.
+//! walls, boxes, tables, a ceiling, soft blocks with bumpy faces) through a
+//! pinhole depth camera, applies a sensor model (axial and lateral noise,
+//! flying pixels, multipath, dropouts, range limits, quantisation, pose
+//! jitter) and writes recordings in the format of
+//! `shared/spec/recording-format.md` with exact ground truth.
 //!
 //! Files, lowest first:
 //! - `geometry.rs`: half-spaces, convex solids, exact ray/solid intersection.
-//! - `scene.rs`: the scene description (TOML scene files).
-//! - `world.rs`: a scene turned into solids and concave junctions.
+//! - `bump_field.rs`: smooth random bumps (a sum of plane waves) on a face.
+//! - `soft_solid.rs`: a box with bumpy top and sides, and its ray march.
+//! - `scene.rs`: the scene description (TOML scene files); the clutter
+//!   objects (tables, ceiling, soft blocks) in `scene/clutter.rs`.
+//! - `world.rs`: a scene turned into solids and concave junctions; one file
+//!   per kind of clutter under `world/`.
 //! - `camera.rs`: camera pose (mount convention) and pixel rays.
 //! - `raycast.rs`: the exact geometry of one view.
 //! - `sensor_model.rs`: the error model's parameters and formulas.
@@ -24,6 +29,7 @@
 //! # Ok::<(), slope_synth::WriteError>(())
 //! ```
 
+pub mod bump_field;
 pub mod camera;
 pub mod cli;
 pub mod error;
@@ -34,6 +40,7 @@ pub mod render;
 pub mod scene;
 pub mod sensor_model;
 pub mod shading;
+pub mod soft_solid;
 pub mod world;
 
 pub use camera::{Camera, CameraPose};
@@ -47,8 +54,8 @@ pub use recording::{
 };
 pub use render::{quantise, render_depth, render_frame, DEPTH_UNIT_M};
 pub use scene::{
-    load_scene_file, parse_scene, CameraModel, GroundBox, Motion, MountPose, Ramp, Scene,
-    SceneFile, SideWall, SlopeDirection,
+    load_scene_file, parse_scene, CameraModel, Ceiling, GroundBox, Motion, MountPose, Ramp, Scene,
+    SceneFile, SideWall, SlopeDirection, SoftBlock, Table,
 };
 pub use sensor_model::{axial_sigma_m, SensorModel};
 pub use world::World;

@@ -13,6 +13,9 @@ use serde::{Deserialize, Serialize};
 use crate::error::SceneError;
 use crate::sensor_model::SensorModel;
 
+mod clutter;
+pub use clutter::{Ceiling, SoftBlock, Table};
+
 /// Everything that is in front of the camera, and the camera itself.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
 #[serde(default, deny_unknown_fields)]
@@ -29,6 +32,12 @@ pub struct Scene {
     pub walls: Vec<SideWall>,
     /// `[[boxes]]`: boxes standing on the ground.
     pub boxes: Vec<GroundBox>,
+    /// `[[tables]]`: tables (a slab on four legs) standing on the ground.
+    pub tables: Vec<Table>,
+    /// `[ceiling]`: a horizontal ceiling or overhang; absent = open sky.
+    pub ceiling: Option<Ceiling>,
+    /// `[[soft_blocks]]`: blocks with bumpy top and sides (beds, sofas).
+    pub soft_blocks: Vec<SoftBlock>,
 }
 
 /// Pinhole depth camera, pixel centres at integer coordinates (the ray
@@ -215,7 +224,8 @@ impl Scene {
     }
 
     /// The ground truth slope: the unsigned angle between the ramp's and
-    /// the ground's normals, degrees; `None` for flat ground.
+    /// the ground's normals, degrees; `None` for flat ground. Clutter
+    /// (walls, boxes, tables, ceilings, soft blocks) never changes it.
     pub fn truth_slope_deg(&self) -> Option<f64> {
         self.ramp.map(|r| r.slope_deg)
     }
@@ -344,10 +354,21 @@ impl Scene {
             )?;
             check(b.yaw_deg.is_finite(), &key("yaw_deg"), "must be finite")?;
         }
+        for (i, table) in self.tables.iter().enumerate() {
+            table.validate(i)?;
+        }
+        if let Some(ceiling) = &self.ceiling {
+            ceiling.validate()?;
+        }
+        for (i, block) in self.soft_blocks.iter().enumerate() {
+            block.validate(i)?;
+        }
+        let objects =
+            self.walls.len() + self.boxes.len() + self.tables.len() + self.soft_blocks.len();
         check(
-            self.walls.len() + self.boxes.len() < usize::from(u16::MAX),
+            objects < usize::from(u16::MAX),
             "boxes",
-            "too many objects",
+            "too many objects (walls + boxes + tables + soft_blocks must be < 65535)",
         )?;
         Ok(())
     }
@@ -449,6 +470,74 @@ mod tests {
             sensor.lateral_noise_px,
             SensorModel::default().lateral_noise_px
         );
+    }
+
+    #[test]
+    fn clutter_tables_parse_with_defaults() {
+        let text = r#"
+            [[tables]]
+            x_m = 0.1
+            y_m = 1.4
+            size_m = [2.0, 1.5]
+            top_m = 0.5
+            [ceiling]
+            height_m = 2.2
+            to_m = 4.0
+            [[soft_blocks]]
+            size_m = [1.0, 1.8, 0.6]
+            seed = 9
+        "#;
+        let file = parse_scene(text, Path::new("c.toml")).expect("valid scene");
+        let s = &file.scene;
+        assert!(s.ramp.is_none());
+        assert_eq!(s.truth_slope_deg(), None);
+        let t = s.tables[0];
+        assert_eq!((t.x_m, t.size_m, t.top_m), (0.1, [2.0, 1.5], 0.5));
+        assert_eq!(t.thickness_m, Table::default().thickness_m);
+        assert_eq!(t.leg_m, Table::default().leg_m);
+        let c = s.ceiling.expect("has a ceiling");
+        assert_eq!((c.height_m, c.to_m), (2.2, 4.0));
+        assert_eq!(c.from_m, f64::NEG_INFINITY);
+        let b = s.soft_blocks[0];
+        assert_eq!((b.size_m, b.seed), ([1.0, 1.8, 0.6], 9));
+        assert_eq!(b.roughness_m, SoftBlock::default().roughness_m);
+        // Clutter never changes the truth.
+        let with_ramp = Scene {
+            ramp: Some(Ramp::default()),
+            ..s.clone()
+        };
+        assert_eq!(with_ramp.truth_slope_deg(), Some(16.0));
+        let back = toml::to_string(&with_ramp).expect("serialisable");
+        let back = parse_scene(&back, Path::new("rt.toml")).expect("parses back");
+        assert_eq!(back.scene, with_ramp);
+    }
+
+    #[test]
+    fn clutter_errors_name_file_and_key() {
+        for (text, key) in [
+            ("[[tables]]\ntop_m = 0.01\n", "tables[0].top_m"),
+            ("[[tables]]\n[[tables]]\nleg_m = -1.0\n", "tables[1].leg_m"),
+            ("[ceiling]\nheight_m = -2.0\n", "ceiling.height_m"),
+            ("[ceiling]\nfrom_m = 2.0\nto_m = 1.0\n", "ceiling.to_m"),
+            (
+                "[[soft_blocks]]\nroughness_m = 0.2\n",
+                "soft_blocks[0].roughness_m",
+            ),
+            (
+                "[[soft_blocks]]\nwavelength_m = 0.0\n",
+                "soft_blocks[0].wavelength_m",
+            ),
+        ] {
+            let err = parse_scene(text, Path::new("k.toml")).expect_err(text);
+            let message = err.to_string();
+            assert!(
+                message.contains(key) && message.contains("k.toml") && message.contains("must"),
+                "{message}"
+            );
+        }
+        let err = parse_scene("[[tables]]\nheight_m = 1.0\n", Path::new("k.toml"))
+            .expect_err("unknown key");
+        assert!(err.to_string().contains("height_m"), "{err}");
     }
 
     #[test]

@@ -20,6 +20,10 @@ pub fn base_rgb(kind: SurfaceKind) -> [u8; 3] {
         SurfaceKind::RampSide | SurfaceKind::RampBack => [170, 100, 44],
         SurfaceKind::Wall => [196, 190, 200],
         SurfaceKind::Box => [64, 112, 176],
+        SurfaceKind::Table => [150, 104, 62],
+        SurfaceKind::TableLeg => [96, 72, 50],
+        SurfaceKind::Ceiling => [224, 222, 212],
+        SurfaceKind::SoftBlock => [118, 150, 108],
     }
 }
 

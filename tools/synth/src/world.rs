@@ -7,7 +7,18 @@
 //! - Descending ramp: the lower ground `z <= -drop`, a wedge between the
 //!   upper ground and the slope, and (for a finite width) two banks beside
 //!   the trench.
-//! - Walls and boxes: one box-shaped solid each.
+//! - Walls and boxes: one box-shaped solid each (boxes, table slabs and
+//!   legs share `world/blocks.rs`).
+//! - Tables: a slab and four legs, box solids (`world/table.rs`).
+//! - Ceiling: one convex solid above its height (`world/ceiling.rs`).
+//! - Soft blocks: one ray-marched [`SoftSolid`] each (`world/soft_block.rs`).
+
+mod blocks;
+mod ceiling;
+mod soft_block;
+mod table;
+
+use blocks::OrientedBox;
 
 use crate::geometry::{
     cast, distance_to_segment, BoxFace, ConvexSolid, HalfSpace, Hit, Pos3, Ray, Surface,
@@ -15,6 +26,7 @@ use crate::geometry::{
 };
 use crate::scene::{GroundBox, Ramp, Scene, SideWall, SlopeDirection};
 use crate::sensor_model::SensorModel;
+use crate::soft_solid::SoftSolid;
 
 /// Half-length used for edges of unbounded surfaces, metres: far beyond
 /// any depth the camera reports, small enough for exact f64 distances.
@@ -35,6 +47,8 @@ pub struct ConcaveJunction {
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct World {
     pub solids: Vec<ConvexSolid>,
+    /// Solids with bumpy faces (soft blocks), ray-marched.
+    pub soft_solids: Vec<SoftSolid>,
     pub junctions: Vec<ConcaveJunction>,
 }
 
@@ -58,17 +72,31 @@ impl World {
         for (i, b) in scene.boxes.iter().enumerate() {
             world.add_box(b, surface_index(i));
         }
+        for (i, table) in scene.tables.iter().enumerate() {
+            world.add_table(table, surface_index(i));
+        }
+        if let Some(ceiling) = &scene.ceiling {
+            world.add_ceiling(ceiling);
+        }
+        for (i, block) in scene.soft_blocks.iter().enumerate() {
+            world.add_soft_block(block, surface_index(i));
+        }
         world
     }
 
     /// The first surface `ray` meets.
     pub fn cast(&self, ray: &Ray) -> Option<Hit> {
-        cast(&self.solids, ray)
+        let exact = cast(&self.solids, ray);
+        self.soft_solids
+            .iter()
+            .filter_map(|s| s.intersect(ray))
+            .chain(exact)
+            .min_by(|a, b| a.t.total_cmp(&b.t))
     }
 
     /// True when `p` is strictly inside some solid.
     pub fn contains(&self, p: &Pos3) -> bool {
-        self.solids.iter().any(|s| s.contains(p))
+        self.solids.iter().any(|s| s.contains(p)) || self.soft_solids.iter().any(|s| s.contains(p))
     }
 
     /// Multipath bias (metres, positive = measured too far) of a reading of
@@ -242,49 +270,18 @@ impl World {
 
     fn add_box(&mut self, b: &GroundBox, index: u16) {
         let face = |f: BoxFace| Surface::new(SurfaceKind::Box, index, f as u8);
-        let (s, c) = b.yaw_deg.to_radians().sin_cos();
-        let across = Vec3::new(c, s, 0.0);
-        let along = Vec3::new(-s, c, 0.0);
-        let centre = Pos3::new(b.x_m, b.y_m, 0.0);
-        let [sx, sy, sz] = b.size_m;
-        let sides = [
-            (-across, sx / 2.0, BoxFace::Inner),
-            (across, sx / 2.0, BoxFace::Outer),
-            (-along, sy / 2.0, BoxFace::Near),
-            (along, sy / 2.0, BoxFace::Far),
-        ];
-        let mut faces = Vec::with_capacity(6);
-        for (normal, half, f) in sides {
-            faces.push(HalfSpace::through(
-                &(centre + normal * half),
-                normal,
-                face(f),
-            ));
-        }
-        faces.push(HalfSpace::through(
-            &centre,
-            -Vec3::z(),
-            face(BoxFace::Bottom),
-        ));
-        faces.push(HalfSpace::through(
-            &(centre + Vec3::z() * sz),
-            Vec3::z(),
-            face(BoxFace::Top),
-        ));
-        self.solids.push(ConvexSolid { faces });
+        let shape = OrientedBox {
+            base: Pos3::new(b.x_m, b.y_m, 0.0),
+            yaw_deg: b.yaw_deg,
+            size_m: b.size_m,
+        };
+        self.solids.push(shape.solid(face));
         // Each side meets the ground along its bottom edge.
-        for (normal, half, f) in sides {
-            let tangent = Vec3::z().cross(&normal);
-            let tangent_half = if f == BoxFace::Inner || f == BoxFace::Outer {
-                sy / 2.0
-            } else {
-                sx / 2.0
-            };
-            let mid = centre + normal * half;
+        for e in shape.bottom_edges() {
             self.junctions.push(ConcaveJunction {
-                a: mid - tangent * tangent_half,
-                b: mid + tangent * tangent_half,
-                surfaces: [GROUND, face(f)],
+                a: e.a,
+                b: e.b,
+                surfaces: [GROUND, face(e.face)],
             });
         }
     }
@@ -305,7 +302,7 @@ fn ground_half_space() -> ConvexSolid {
 }
 
 fn surface_index(i: usize) -> u16 {
-    // Scene::validate caps walls + boxes below u16::MAX.
+    // Scene::validate caps the number of indexed objects below u16::MAX.
     u16::try_from(i).unwrap_or(u16::MAX)
 }
 

@@ -234,3 +234,44 @@ fn yawed_ramp_with_side_walls_and_box() {
         assert_angle(angle_to_ground(&planes, wall), 90.0, "side wall");
     }
 }
+
+#[test]
+fn flat_floor_without_ramp_is_exact_and_has_no_truth() {
+    let scene = Scene {
+        mount: MountPose {
+            height_m: 0.9,
+            pitch_deg: -28.0,
+            roll_deg: 2.0,
+        },
+        ..Scene::default()
+    };
+    // clean_planes checks the ground against [mount] and the missing truth.
+    let planes = clean_planes(&scene, 1, &[0]);
+    assert_eq!(
+        planes.keys().collect::<Vec<_>>(),
+        [&Surface::single(SurfaceKind::Ground)]
+    );
+}
+
+#[test]
+fn shallow_ramp_three_metres_away() {
+    let scene = Scene {
+        ramp: Some(Ramp {
+            slope_deg: 5.0,
+            distance_m: 3.0,
+            ..Ramp::default()
+        }),
+        ..Scene::default()
+    };
+    let planes = clean_planes(&scene, 1, &[0]);
+    assert_angle(angle_to_ground(&planes, RAMP), 5.0, "shallow ramp at 3 m");
+}
+
+#[test]
+fn table_over_the_floor_leaves_the_truth_and_ramp_angle() {
+    let scene = common::scene_fixture("table_hides_floor.toml");
+    let planes = clean_planes(&scene, 1, &[0]);
+    assert_angle(angle_to_ground(&planes, RAMP), 16.0, "ramp behind a table");
+    let top = Surface::new(SurfaceKind::Table, 0, BoxFace::Top as u8);
+    assert_angle(angle_to_ground(&planes, top), 0.0, "table top");
+}

@@ -105,3 +105,19 @@ pub fn angle_deg(a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
         .acos()
         .to_degrees()
 }
+
+/// The world point of pixel (u, v) at depth `z_m` seen by `camera` (the
+/// exact camera of its frame).
+pub fn world_point(camera: &Camera, u: u32, v: u32, z_m: f64) -> Vector3<f64> {
+    camera.ray(f64::from(u), f64::from(v)).at(z_m).coords
+}
+
+/// A scene file shipped in `tests/scenes/`.
+pub fn scene_fixture(name: &str) -> Scene {
+    let path: std::path::PathBuf = [env!("CARGO_MANIFEST_DIR"), "tests", "scenes", name]
+        .iter()
+        .collect();
+    slope_synth::load_scene_file(&path)
+        .unwrap_or_else(|e| panic!("{name}: {e}"))
+        .scene
+}

@@ -1,0 +1,103 @@
+//! Which segmented planes are the ground and which the inclined plane; the
+//! slope's sign and the distance to the inclined plane.
+//!
+//! Every plane's normal points towards the camera, so `d` in `n . x + d = 0`
+//! is the camera's distance from the plane.
+//!
+//! 1. **Reference up.** With a mount (known pitch), the mount's up vector;
+//!    without one, the camera's -y axis (an upright camera).
+//! 2. **Flat planes only.** A plane whose inliers fill its RANSAC threshold
+//!    band instead of hugging the plane (relative RMS above
+//!    `max_relative_rms`: fabric, clutter, people) is not a measurement
+//!    surface: it is neither ground nor inclined plane.
+//! 3. **Ground** ([`ground`]): the lowest well-supported plane parallel to
+//!    the level plane nearest the mount's up (or, without a mount, the one
+//!    in front of the robot), at the mount's height when that is known,
+//!    measured on all of its segments; else the mount's plane
+//!    (`ground_from_mount`); else `NoGround`.
+//! 4. **Forward.** The optical axis projected onto the ground.
+//! 5. **Inclined plane** ([`inclined`]): the nearest well-supported plane
+//!    ahead that is inclined (not parallel, not facing down) and faces along
+//!    forward; else `NoInclinedPlane`.
+//! 6. **Sign.** Uphill (positive) when the inclined plane's normal points
+//!    back towards the robot, downhill (negative) when it points forward.
+//! 7. **Distance.** Along the optical axis to the inclined plane.
+
+pub mod ground;
+pub mod inclined;
+pub mod quality;
+
+use nalgebra::Vector3;
+use slope_ipc_types::EstimateStatus;
+
+use crate::config::SelectionConfig;
+use crate::plane_fit::Plane;
+
+pub use ground::Ground;
+pub use inclined::{axis_distance, forward_direction, slope_sign};
+pub use quality::{plane_quality, PlaneQuality};
+
+/// What selection needs to know about a segmented plane.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlaneSummary {
+    /// Normal towards the camera and offset.
+    pub plane: Plane,
+    /// Inlier pixels.
+    pub inliers: usize,
+    /// Inlier pixels in the bottom third of the image's rows.
+    pub bottom_pixels: usize,
+    pub centroid: Vector3<f64>,
+    pub quality: PlaneQuality,
+}
+
+/// The chosen pair.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Selection {
+    pub ground: Ground,
+    pub inclined: usize,
+    /// Reference up: the mount's up vector, or the camera's -y.
+    pub reference_up: Vector3<f64>,
+    /// Ground normal used for the direction (unit, up): the lowest ground
+    /// plane's, or the reference up for a ground from the mount.
+    pub up: Vector3<f64>,
+    /// The robot's forward direction (unit, perpendicular to `up`).
+    pub forward: Vector3<f64>,
+}
+
+/// True when the plane is flat at the sensor's noise level.
+pub fn is_flat(plane: &PlaneSummary, config: &SelectionConfig) -> bool {
+    plane.quality.relative_rms <= config.max_relative_rms
+}
+
+/// Chooses ground and inclined plane. `mount_up` is the mount's up vector
+/// (known pitch), `mount_height_m` its height above the ground (when known).
+/// The error is the status to report.
+pub fn select_planes(
+    planes: &[PlaneSummary],
+    mount_up: Option<Vector3<f64>>,
+    mount_height_m: Option<f64>,
+    config: &SelectionConfig,
+) -> Result<Selection, EstimateStatus> {
+    let mount_up = mount_up.and_then(|u| u.try_normalize(1e-12));
+    let reference = mount_up.unwrap_or(-Vector3::y());
+    let height = mount_height_m.filter(|h| h.is_finite() && *h > 0.0 && mount_up.is_some());
+    let ground = ground::choose_ground(planes, &reference, height, mount_up.is_some(), config)
+        .ok_or(EstimateStatus::NoGround)?;
+    let (up, members): (Vector3<f64>, &[usize]) = match &ground {
+        Ground::Planes(members) => (planes[members[0]].plane.normal, members),
+        Ground::Mount => (reference, &[]),
+    };
+    let forward = forward_direction(&up);
+    let inclined = inclined::choose_inclined(planes, members, &up, &forward, config)
+        .ok_or(EstimateStatus::NoInclinedPlane)?;
+    Ok(Selection {
+        ground,
+        inclined,
+        reference_up: reference,
+        up,
+        forward,
+    })
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,236 @@
+//! Selection rules on analytic planes: each test fails without its rule.
+
+use nalgebra::Vector3;
+
+use super::*;
+use crate::cloud::angle_between_deg;
+use crate::fixtures::Scene;
+
+/// A flat plane summary for surface `k` of `scene`, seen in the camera
+/// frame, with `pixels` inliers (a third of them in the bottom third of the
+/// image for the ground, surface 0) and `area_m2` of surface; its centroid
+/// half a metre into the surface along the world's forward axis.
+fn summary(scene: &Scene, k: usize, pixels: usize, area_m2: f64) -> PlaneSummary {
+    let s = &scene.surfaces[k];
+    let n = scene.to_camera(&s.normal);
+    let c = scene.to_camera(&(s.point - scene.camera_centre()));
+    let ahead = scene.to_camera(&Vector3::new(0.0, 1.0, 0.0));
+    let plane = Plane::from_point_normal(&c, &n)
+        .unwrap()
+        .oriented_towards(&Vector3::zeros());
+    PlaneSummary {
+        plane,
+        inliers: pixels,
+        bottom_pixels: if k == 0 { pixels / 3 } else { 0 },
+        centroid: c + ahead * 0.5,
+        quality: PlaneQuality {
+            rms_m: 0.002,
+            relative_rms: 0.1,
+            area_m2,
+            border_fraction: 0.0,
+        },
+    }
+}
+
+/// A level surface `height_m` above the ground (a bed, a table top) in
+/// `scene`, as a summary: the ground plane raised.
+fn raised(scene: &Scene, height_m: f64, pixels: usize, area_m2: f64) -> PlaneSummary {
+    let mut s = summary(scene, 0, pixels, area_m2);
+    s.bottom_pixels = 0;
+    let up = s.plane.normal;
+    s.plane.d -= height_m;
+    s.centroid += up * height_m;
+    s
+}
+
+fn mount_up(scene: &Scene) -> Option<Vector3<f64>> {
+    scene.mount().up_vector().map(Vector3::from)
+}
+
+fn config() -> SelectionConfig {
+    SelectionConfig::default()
+}
+
+#[test]
+fn ramp_between_walls_is_measured_as_the_ramp() {
+    for slope in [12.5, -12.5, 47.0] {
+        let scene = Scene::ramp_between_walls(slope);
+        // Walls get the most inliers: they must still not be chosen.
+        let planes = vec![
+            summary(&scene, 2, 9000, 2.0),
+            summary(&scene, 0, 5000, 1.0),
+            summary(&scene, 3, 8000, 2.0),
+            summary(&scene, 1, 3000, 0.5),
+        ];
+        for up in [mount_up(&scene), None] {
+            let sel = select_planes(&planes, up, None, &config()).unwrap();
+            assert_eq!(sel.ground, Ground::Planes(vec![1]));
+            assert_eq!(sel.inclined, 3);
+            let angle = angle_between_deg(&planes[3].plane.normal, &sel.up);
+            assert!((angle - slope.abs()).abs() < 1e-9);
+            assert_eq!(
+                slope_sign(&planes[3].plane.normal, &sel.forward),
+                slope.signum()
+            );
+        }
+    }
+}
+
+#[test]
+fn no_ground_uses_the_mount_and_no_mount_is_an_error() {
+    let scene = Scene::ramp(30.0);
+    let planes = vec![summary(&scene, 1, 3000, 0.5)];
+    let sel = select_planes(&planes, mount_up(&scene), None, &config()).unwrap();
+    assert_eq!(sel.ground, Ground::Mount);
+    assert!((angle_between_deg(&planes[0].plane.normal, &sel.up) - 30.0).abs() < 1e-9);
+    let wall = Scene::wall_facing(2.0);
+    let planes = vec![summary(&wall, 0, 3000, 1.0)];
+    assert_eq!(
+        select_planes(&planes, None, None, &config()),
+        Err(EstimateStatus::NoGround)
+    );
+    let flat = Scene::ramp(0.0);
+    let planes = vec![summary(&flat, 0, 3000, 1.0), summary(&flat, 1, 2000, 0.5)];
+    assert_eq!(
+        select_planes(&planes, mount_up(&flat), None, &config()),
+        Err(EstimateStatus::NoInclinedPlane)
+    );
+}
+
+/// A bed top 0.7 m above the floor, with ten times the floor's pixels, is
+/// not the ground: the floor is lower. Its side is then no slope.
+#[test]
+fn the_lowest_supported_level_plane_is_the_ground() {
+    let scene = Scene::ramp(16.0);
+    let planes = vec![
+        raised(&scene, 0.7, 40_000, 2.0),
+        summary(&scene, 0, 4000, 0.3),
+        summary(&scene, 1, 6000, 0.5),
+    ];
+    for up in [mount_up(&scene), None] {
+        let sel = select_planes(&planes, up, None, &config()).unwrap();
+        assert_eq!(sel.ground, Ground::Planes(vec![1]), "{up:?}");
+        assert_eq!(sel.inclined, 2);
+    }
+    // Too small a floor patch (pixels or area) does not count.
+    for (pixels, area) in [(1000, 0.3), (4000, 0.05)] {
+        let mut small = planes.clone();
+        small[1] = summary(&scene, 0, pixels, area);
+        let sel = select_planes(&small, mount_up(&scene), None, &config()).unwrap();
+        assert_eq!(sel.ground, Ground::Planes(vec![0]));
+    }
+}
+
+/// The mount says where the ground is: a table top 0.75 m above it is not,
+/// and with no level plane at the mount's height the mount's plane is the
+/// ground and the ramp is still measured.
+#[test]
+fn with_a_known_height_the_ground_is_at_the_mount_height() {
+    let scene = Scene::ramp(16.0);
+    let height = scene.camera_height_m;
+    let planes = vec![
+        raised(&scene, 0.75, 40_000, 2.0),
+        summary(&scene, 1, 6000, 0.5),
+    ];
+    let sel = select_planes(&planes, mount_up(&scene), Some(height), &config()).unwrap();
+    assert_eq!(sel.ground, Ground::Mount);
+    assert_eq!(sel.inclined, 1);
+    assert!((angle_between_deg(&planes[1].plane.normal, &sel.up) - 16.0).abs() < 1e-9);
+    // The floor within the tolerance is the ground.
+    let mut with_floor = planes.clone();
+    with_floor.push(raised(&scene, 0.1, 3000, 0.3));
+    let sel = select_planes(&with_floor, mount_up(&scene), Some(height), &config()).unwrap();
+    assert_eq!(sel.ground, Ground::Planes(vec![2]));
+    // Without the height, the table is the only level plane, so the ground.
+    let sel = select_planes(&planes, mount_up(&scene), None, &config()).unwrap();
+    assert_eq!(sel.ground, Ground::Planes(vec![0]));
+}
+
+/// Two pieces of one floor (2 cm apart at the second's centroid) are one
+/// ground; a tread 17 cm up is not part of it.
+#[test]
+fn the_ground_is_measured_on_all_of_its_segments() {
+    let scene = Scene::ramp(90.0);
+    let planes = vec![
+        summary(&scene, 0, 30_000, 1.0),
+        raised(&scene, 0.17, 20_000, 0.5),
+        raised(&scene, 0.02, 8000, 0.4),
+        summary(&scene, 1, 6000, 0.3),
+    ];
+    let sel = select_planes(&planes, mount_up(&scene), None, &config()).unwrap();
+    assert_eq!(sel.ground, Ground::Planes(vec![0, 2]));
+    assert_eq!(sel.inclined, 3);
+}
+
+/// A surface facing down (a ceiling, an overhang) is never the inclined
+/// plane, however near; a wall is.
+#[test]
+fn surfaces_facing_down_are_never_inclined() {
+    let scene = Scene::ramp(90.0);
+    let mut ceiling = raised(&scene, 2.2, 20_000, 3.0);
+    // Seen from below: normal towards the camera, i.e. down, tilted 20
+    // degrees towards the robot so that it has a heading.
+    let down = -ceiling.plane.normal;
+    let back = scene.to_camera(&Vector3::new(0.0, -1.0, 0.0));
+    let n = (down * 20f64.to_radians().cos() + back * 20f64.to_radians().sin()).normalize();
+    ceiling.centroid = scene.to_camera(&(Vector3::new(0.0, 1.0, 2.2) - scene.camera_centre()));
+    ceiling.plane = Plane::from_point_normal(&ceiling.centroid, &n)
+        .unwrap()
+        .oriented_towards(&Vector3::zeros());
+    let planes = vec![
+        summary(&scene, 0, 30_000, 1.0),
+        ceiling,
+        summary(&scene, 1, 6000, 0.3),
+    ];
+    let sel = select_planes(&planes, mount_up(&scene), None, &config()).unwrap();
+    assert_eq!(sel.inclined, 2);
+    assert!(angle_between_deg(&planes[1].plane.normal, &sel.up) > 150.0);
+}
+
+/// A rough surface (relative RMS 0.55) is neither ground nor inclined plane.
+#[test]
+fn rough_surfaces_are_not_planes() {
+    let scene = Scene::ramp(30.0);
+    let mut rough_side = summary(&scene, 1, 9000, 0.6);
+    rough_side.quality.relative_rms = 0.55;
+    rough_side.centroid *= 0.5;
+    let planes = vec![
+        summary(&scene, 0, 30_000, 1.0),
+        rough_side,
+        summary(&scene, 1, 6000, 0.3),
+    ];
+    let sel = select_planes(&planes, mount_up(&scene), None, &config()).unwrap();
+    assert_eq!(sel.inclined, 2);
+    let mut rough_floor = planes.clone();
+    rough_floor[0].quality.relative_rms = 0.55;
+    rough_floor.truncate(1);
+    assert_eq!(
+        select_planes(&rough_floor, None, None, &config()),
+        Err(EstimateStatus::NoGround)
+    );
+}
+
+/// One tolerance makes "parallel" and "inclined": a plane 3.9 degrees off the
+/// ground is neither part of it nor a slope; 4.1 degrees is a slope.
+#[test]
+fn parallel_and_inclined_do_not_overlap() {
+    for (slope, expected) in [(3.9, Err(EstimateStatus::NoInclinedPlane)), (4.1, Ok(1))] {
+        let scene = Scene::ramp(slope);
+        let planes = vec![
+            summary(&scene, 0, 30_000, 1.0),
+            summary(&scene, 1, 6000, 0.5),
+        ];
+        let sel = select_planes(&planes, mount_up(&scene), None, &config());
+        assert_eq!(sel.map(|s| s.inclined), expected, "{slope}");
+    }
+}
+
+#[test]
+fn distance_along_the_axis() {
+    let plane =
+        Plane::from_point_normal(&Vector3::new(0.0, 0.0, 3.0), &Vector3::new(0.0, -1.0, -1.0))
+            .unwrap();
+    assert!((axis_distance(&plane) - 3.0).abs() < 1e-12);
+    let parallel = Plane::from_point_normal(&Vector3::new(0.0, 1.0, 0.0), &Vector3::y()).unwrap();
+    assert!(axis_distance(&parallel).is_nan());
+}
