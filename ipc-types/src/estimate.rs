@@ -1,4 +1,4 @@
-//! The slope estimate every subscriber receives.
+//! The slope estimate every subscriber receives (`slope.SlopeEstimate.v2`).
 
 use iceoryx2::prelude::ZeroCopySend;
 
@@ -72,14 +72,22 @@ impl SlopeMethod {
     }
 }
 
-/// One slope estimate, published once per processed frame.
+/// One slope estimate, published once per processed frame (version 2 of
+/// the message).
 ///
 /// Planes are `[a, b, c, d]` with `a x + b y + c z + d = 0` in the camera
 /// frame, `(a, b, c)` a unit normal pointing up and out of the surface
-/// (towards the camera side); all zero when absent.
+/// (towards the camera side, so `d` is the camera's distance to the plane);
+/// all zero when absent.
+///
+/// Version 2 keeps every field of version 1 at the same offset (the first
+/// 160 bytes are the v1 layout) and appends the plane quality, the
+/// confidence and the tracked slope. The layout has no implicit padding
+/// (`reserved` fills the one gap); the test `layout_is_pinned` pins the size
+/// and every offset, for readers in other languages.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("slope.SlopeEstimate.v1")]
+#[type_name("slope.SlopeEstimate.v2")]
 pub struct SlopeEstimate {
     /// The cloud's `frame_index`.
     pub frame_index: u64,
@@ -116,9 +124,41 @@ pub struct SlopeEstimate {
     pub ground_from_mount: u32,
     /// Time spent estimating this frame, microseconds.
     pub processing_us: u64,
+    // ---- version 2 ----
+    /// How far to trust `slope_deg`, 0..=1 (0 unless `status` is ok).
+    pub confidence: f64,
+    /// Why `confidence` is below 1: bits of [`crate::confidence`] (several
+    /// may be set); see [`SlopeEstimate::confidence_reason_names`].
+    pub confidence_reasons: u32,
+    /// Always 0: fills the gap before the next `f64`, so that the layout has
+    /// no implicit padding.
+    pub reserved: u32,
+    /// RMS distance of the ground plane's inliers from the plane, metres;
+    /// NaN without a measured ground plane.
+    pub ground_rms_m: f64,
+    /// RMS distance of the inclined plane's inliers from the plane, metres;
+    /// NaN without an inclined plane.
+    pub inclined_rms_m: f64,
+    /// Surface the ground plane's inliers cover, square metres; NaN without
+    /// a measured ground plane.
+    pub ground_area_m2: f64,
+    /// Surface the inclined plane's inliers cover, square metres; NaN
+    /// without an inclined plane.
+    pub inclined_area_m2: f64,
+    /// The slope of the plane ahead followed over frames by the estimator,
+    /// degrees, signed as `slope_deg`; NaN when there is no track (yet).
+    pub tracked_slope_deg: f64,
+    /// Standard deviation of `tracked_slope_deg`, degrees; NaN when there is
+    /// no track.
+    pub tracked_std_deg: f64,
+    /// Frames accepted into the track since it (re)started; 0 without a
+    /// track.
+    pub tracked_frames: u32,
+    /// 1 when this frame's estimate was accepted into the track, else 0.
+    pub tracked_accepted: u32,
 }
 
-const _: () = assert!(core::mem::size_of::<SlopeEstimate>() == 160);
+const _: () = assert!(core::mem::size_of::<SlopeEstimate>() == 232);
 
 impl SlopeEstimate {
     /// The status, or `BadFrame` for a value this build does not know.
@@ -133,6 +173,18 @@ impl SlopeEstimate {
     /// Capture-to-publish latency, milliseconds.
     pub fn latency_ms(&self) -> f64 {
         self.publish_stamp_ns.saturating_sub(self.capture_stamp_ns) as f64 / 1e6
+    }
+
+    /// The names of the bits set in `confidence_reasons`, in bit order
+    /// (bits this build does not know are left out).
+    pub fn confidence_reason_names(&self) -> impl Iterator<Item = &'static str> {
+        crate::confidence::names(self.confidence_reasons)
+    }
+
+    /// True when the estimator tracks a slope: `tracked_slope_deg` holds a
+    /// value.
+    pub fn has_tracked_slope(&self) -> bool {
+        self.tracked_slope_deg.is_finite()
     }
 }
 
@@ -156,13 +208,158 @@ impl Default for SlopeEstimate {
             samples: 0,
             ground_from_mount: 0,
             processing_us: 0,
+            confidence: 0.0,
+            confidence_reasons: 0,
+            reserved: 0,
+            ground_rms_m: f64::NAN,
+            inclined_rms_m: f64::NAN,
+            ground_area_m2: f64::NAN,
+            inclined_area_m2: f64::NAN,
+            tracked_slope_deg: f64::NAN,
+            tracked_std_deg: f64::NAN,
+            tracked_frames: 0,
+            tracked_accepted: 0,
         }
     }
 }
 
 #[cfg(test)]
 mod tests {
+    use core::mem::{offset_of, size_of};
+
     use super::*;
+    use crate::confidence;
+
+    /// The size of a field, from a projection onto it.
+    fn field_size<T, F>(_: fn(&T) -> &F) -> usize {
+        size_of::<F>()
+    }
+
+    /// `(name, offset, size)` of every field, in declaration order.
+    macro_rules! fields {
+        ($($name:ident),* $(,)?) => {
+            [$((
+                stringify!($name),
+                offset_of!(SlopeEstimate, $name),
+                field_size(|e: &SlopeEstimate| &e.$name),
+            )),*]
+        };
+    }
+
+    /// The wire layout of `slope.SlopeEstimate.v2`. Readers in other
+    /// languages are written against these numbers: a change here is a new
+    /// message version, not an edit.
+    #[test]
+    fn layout_is_pinned() {
+        // SAFETY: `type_name` is unsafe to implement (the implementer vouches
+        // for the layout), not to call: it returns the pinned constant.
+        let type_name = unsafe { <SlopeEstimate as ZeroCopySend>::type_name() };
+        assert_eq!(type_name, "slope.SlopeEstimate.v2");
+        assert_eq!(size_of::<SlopeEstimate>(), 232);
+        assert_eq!(core::mem::align_of::<SlopeEstimate>(), 8);
+        let expected: [(&str, usize, usize); 28] = [
+            ("frame_index", 0, 8),
+            ("capture_stamp_ns", 8, 8),
+            ("publish_stamp_ns", 16, 8),
+            ("source_stamp_ns", 24, 8),
+            ("dropped_frames", 32, 8),
+            ("status", 40, 4),
+            ("method", 44, 4),
+            ("slope_deg", 48, 8),
+            ("slope_std_deg", 56, 8),
+            ("distance_m", 64, 8),
+            ("ground_plane", 72, 32),
+            ("inclined_plane", 104, 32),
+            ("ground_inliers", 136, 4),
+            ("inclined_inliers", 140, 4),
+            ("samples", 144, 4),
+            ("ground_from_mount", 148, 4),
+            ("processing_us", 152, 8),
+            ("confidence", 160, 8),
+            ("confidence_reasons", 168, 4),
+            ("reserved", 172, 4),
+            ("ground_rms_m", 176, 8),
+            ("inclined_rms_m", 184, 8),
+            ("ground_area_m2", 192, 8),
+            ("inclined_area_m2", 200, 8),
+            ("tracked_slope_deg", 208, 8),
+            ("tracked_std_deg", 216, 8),
+            ("tracked_frames", 224, 4),
+            ("tracked_accepted", 228, 4),
+        ];
+        let actual = fields!(
+            frame_index,
+            capture_stamp_ns,
+            publish_stamp_ns,
+            source_stamp_ns,
+            dropped_frames,
+            status,
+            method,
+            slope_deg,
+            slope_std_deg,
+            distance_m,
+            ground_plane,
+            inclined_plane,
+            ground_inliers,
+            inclined_inliers,
+            samples,
+            ground_from_mount,
+            processing_us,
+            confidence,
+            confidence_reasons,
+            reserved,
+            ground_rms_m,
+            inclined_rms_m,
+            ground_area_m2,
+            inclined_area_m2,
+            tracked_slope_deg,
+            tracked_std_deg,
+            tracked_frames,
+            tracked_accepted,
+        );
+        assert_eq!(actual, expected);
+        // No implicit padding: each field starts where the one before ends,
+        // and the last one ends at the end of the struct.
+        let mut end = 0;
+        for (name, offset, size) in actual {
+            assert_eq!(offset, end, "a gap before {name}");
+            end = offset + size;
+        }
+        assert_eq!(end, size_of::<SlopeEstimate>());
+    }
+
+    /// The `Default` of every v2 field: nothing measured, nothing tracked.
+    #[test]
+    fn default_has_no_plane_no_confidence_and_no_track() {
+        let e = SlopeEstimate::default();
+        assert_eq!(e.status(), EstimateStatus::BadFrame);
+        assert_eq!((e.confidence, e.confidence_reasons), (0.0, 0));
+        assert_eq!(e.reserved, 0);
+        for value in [
+            e.ground_rms_m,
+            e.inclined_rms_m,
+            e.ground_area_m2,
+            e.inclined_area_m2,
+            e.tracked_slope_deg,
+            e.tracked_std_deg,
+        ] {
+            assert!(value.is_nan());
+        }
+        assert_eq!((e.tracked_frames, e.tracked_accepted), (0, 0));
+        assert!(!e.has_tracked_slope());
+        assert_eq!(e.confidence_reason_names().count(), 0);
+    }
+
+    #[test]
+    fn confidence_reasons_are_named_in_bit_order() {
+        let e = SlopeEstimate {
+            confidence: 0.4,
+            confidence_reasons: confidence::SMALL_AREA | confidence::FEW_POINTS | 1 << 31,
+            ..Default::default()
+        };
+        let names: Vec<_> = e.confidence_reason_names().collect();
+        assert_eq!(names, ["few_points", "small_area"]);
+    }
 
     #[test]
     fn status_round_trips_through_raw() {

@@ -10,10 +10,11 @@
 //! |---|---|---|---|
 //! | `slope/cloud` | publish-subscribe | `[CloudPoint]` (row-major, `width * height`) | [`CloudHeader`] |
 //! | `slope/cloud` | event | "a new cloud was sent" | - |
-//! | `slope/estimate` | publish-subscribe | [`SlopeEstimate`] | - |
+//! | `slope/estimate` | publish-subscribe | [`SlopeEstimate`] (`slope.SlopeEstimate.v2`) | - |
 //! | `slope/estimate` | event | "a new estimate was sent" | - |
 
 mod cloud;
+pub mod confidence;
 mod estimate;
 mod services;
 

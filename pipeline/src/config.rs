@@ -23,6 +23,9 @@
 //!
 //! [cumulative]              # paper 3.2
 //! draws = 1000              # paper: 100
+//!
+//! [tracking]                # the slope followed over frames
+//! window = 15
 //! ```
 //!
 //! Every section and key is optional; `deny_unknown_fields` turns a typo into
@@ -30,6 +33,8 @@
 
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use slope_ipc_types::SlopeMethod;
+
+pub use crate::tracking::TrackingConfig;
 
 /// The method named on command lines and in config files:
 /// `"paper" | "least-squares" | "tls"`.
@@ -71,6 +76,7 @@ pub struct EstimatorConfig {
     pub kmeans: KmeansConfig,
     pub cumulative: CumulativeConfig,
     pub selection: SelectionConfig,
+    pub tracking: TrackingConfig,
 }
 
 impl Default for EstimatorConfig {
@@ -85,6 +91,7 @@ impl Default for EstimatorConfig {
             kmeans: KmeansConfig::default(),
             cumulative: CumulativeConfig::default(),
             selection: SelectionConfig::default(),
+            tracking: TrackingConfig::default(),
         }
     }
 }
@@ -499,6 +506,19 @@ impl EstimatorConfig {
         }
         angle("selection.max_heading_deg", s.max_heading_deg)?;
         fraction("selection.min_relative_support", s.min_relative_support)?;
+        let t = &self.tracking;
+        at_least("tracking.window", t.window, 1)?;
+        at_least("tracking.reset_after", t.reset_after, 1)?;
+        at_least("tracking.max_missed", t.max_missed, 1)?;
+        fraction("tracking.min_confidence", t.min_confidence)?;
+        for (key, value) in [
+            ("tracking.gate_deg", t.gate_deg),
+            ("tracking.gate_sigmas", t.gate_sigmas),
+        ] {
+            if !(value.is_finite() && value >= 0.0) {
+                return Err(invalid(key, value, "must be a finite number >= 0"));
+            }
+        }
         Ok(())
     }
 }

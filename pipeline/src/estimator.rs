@@ -11,20 +11,32 @@ use std::time::Instant;
 use nalgebra::Vector3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use slope_ipc_types::{EstimateStatus, SlopeEstimate, SlopeMethod};
+use slope_ipc_types::{EstimateStatus, SlopeMethod};
 
 use crate::cloud::{angle_between_deg, is_measured, to_vec3, CloudView};
+use crate::confidence::{confidence, ChosenPlane};
 use crate::config::EstimatorConfig;
 use crate::cosine_kmeans::CosineKmeans;
 use crate::cumulative_angle::{cumulative_angle, rotation_axis};
 use crate::normals::NormalEstimator;
 use crate::pass_through::PassThrough;
 use crate::plane_fit::{fit_least_squares, fit_tls, Moments, Plane};
-use crate::ransac_planes::{PlaneSegmenter, Threshold};
+use crate::ransac_planes::{PlaneSegmenter, SegmentedPlane, Threshold};
 use crate::selection::{
-    axis_distance, plane_quality, select_planes, slope_sign, Ground, PlaneSummary,
+    axis_distance, plane_quality, select_planes, slope_sign, Ground, PlaneQuality, PlaneSummary,
+    Selection,
 };
 use crate::statistical_outlier::StatisticalOutlierFilter;
+use crate::tracking::{FrameSlope, SlopeTracker, TrackedSlope};
+
+/// Where a frame sits in its stream.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct FrameInfo {
+    /// Frame index (the cloud header's `frame_index`).
+    pub index: u64,
+    /// Capture time, nanoseconds (any epoch; differences are used).
+    pub stamp_ns: u64,
+}
 
 /// A fitted plane in the estimate.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -32,8 +44,12 @@ pub struct PlaneEstimate {
     /// `[a, b, c, d]`: `a x + b y + c z + d = 0`, `(a, b, c)` a unit normal
     /// towards the camera side.
     pub coefficients: [f64; 4],
-    /// RANSAC inliers of the plane.
+    /// RANSAC inliers of the plane (of all its segments for the ground).
     pub inliers: u32,
+    /// RMS distance of the inliers from the plane, metres.
+    pub rms_m: f64,
+    /// Surface the inliers cover, square metres.
+    pub area_m2: f64,
 }
 
 /// Milliseconds per stage.
@@ -72,6 +88,13 @@ pub struct Estimate {
     pub inclined: Option<PlaneEstimate>,
     /// True when the ground normal is the mount's up vector.
     pub ground_from_mount: bool,
+    /// How far to trust `slope_deg`, 0..=1 (0 unless `Ok`).
+    pub confidence: f64,
+    /// Why the confidence is below 1: bits of
+    /// `slope_ipc_types::confidence`.
+    pub confidence_reasons: u32,
+    /// The slope followed over frames (`Estimator::estimate_frame`).
+    pub tracked: Option<TrackedSlope>,
     pub timings: StageTimings,
 }
 
@@ -87,25 +110,11 @@ impl Estimate {
             ground: None,
             inclined: None,
             ground_from_mount: false,
+            confidence: 0.0,
+            confidence_reasons: 0,
+            tracked: None,
             timings: StageTimings::default(),
         }
-    }
-
-    /// Fills the estimate's fields of `msg` (not the stamps, frame index or
-    /// drop counter, which belong to the caller).
-    pub fn write_message(&self, msg: &mut SlopeEstimate) {
-        msg.status = self.status as u32;
-        msg.method = self.method as u32;
-        msg.slope_deg = self.slope_deg;
-        msg.slope_std_deg = self.slope_std_deg;
-        msg.distance_m = self.distance_m;
-        msg.ground_plane = self.ground.map_or([0.0; 4], |p| p.coefficients);
-        msg.inclined_plane = self.inclined.map_or([0.0; 4], |p| p.coefficients);
-        msg.ground_inliers = self.ground.map_or(0, |p| p.inliers);
-        msg.inclined_inliers = self.inclined.map_or(0, |p| p.inliers);
-        msg.samples = self.samples;
-        msg.ground_from_mount = u32::from(self.ground_from_mount);
-        msg.processing_us = (self.timings.total_ms * 1000.0).round().max(0.0) as u64;
     }
 }
 
@@ -153,11 +162,8 @@ pub struct Estimator {
     summaries: Vec<PlaneSummary>,
     /// Inlier pixels of every segment of the ground, in pixel order.
     ground_pixels: Vec<u32>,
-    pass_through: PassThrough,
-    normals: NormalEstimator,
-    kmeans: CosineKmeans,
-    ground_normals: Vec<Vector3<f64>>,
-    inclined_normals: Vec<Vector3<f64>>,
+    paper: PaperStages,
+    tracker: SlopeTracker,
 }
 
 impl Estimator {
@@ -169,11 +175,8 @@ impl Estimator {
             segmenter: PlaneSegmenter::new(),
             summaries: Vec::new(),
             ground_pixels: Vec::new(),
-            pass_through: PassThrough::new(),
-            normals: NormalEstimator::new(),
-            kmeans: CosineKmeans::new(),
-            ground_normals: Vec::new(),
-            inclined_normals: Vec::new(),
+            paper: PaperStages::default(),
+            tracker: SlopeTracker::new(),
         }
     }
 
@@ -183,20 +186,116 @@ impl Estimator {
 
     /// Estimates the slope in one frame. Never panics: a malformed view
     /// (`points.len() != width * height`, zero size) gives `BadFrame`.
+    /// The frame is taken as frame 0 and not tracked; see
+    /// [`Estimator::estimate_frame`].
     pub fn estimate(&mut self, cloud: &CloudView<'_>) -> Estimate {
         let mut clock = Stopwatch::new();
-        let mut estimate = self.run(cloud, &mut clock);
+        let mut estimate = self.run(cloud, 0, &mut clock);
         estimate.timings = clock.finish();
         estimate
     }
 
-    fn run(&mut self, cloud: &CloudView<'_>, clock: &mut Stopwatch) -> Estimate {
+    /// Estimates the slope in frame `frame` of a stream. The random draws
+    /// depend on the seed and the frame index (a bad draw on a static scene
+    /// does not repeat on every frame; the same seed and frame give the same
+    /// answer).
+    /// The estimate carries the tracked slope after this frame
+    /// (`tracking.rs`).
+    pub fn estimate_frame(&mut self, cloud: &CloudView<'_>, frame: FrameInfo) -> Estimate {
+        let mut clock = Stopwatch::new();
+        let mut estimate = self.run(cloud, frame.index, &mut clock);
+        let samples = f64::from(estimate.samples.max(1));
+        let slope = FrameSlope {
+            status: estimate.status,
+            slope_deg: estimate.slope_deg,
+            error_deg: estimate.slope_std_deg / samples.sqrt(),
+            confidence: estimate.confidence,
+        };
+        estimate.tracked = Some(self.tracker.update(&slope, &self.config.tracking));
+        clock.lap("tracking");
+        estimate.timings = clock.finish();
+        estimate
+    }
+
+    fn run(&mut self, cloud: &CloudView<'_>, frame_index: u64, clock: &mut Stopwatch) -> Estimate {
         let method = self.config.method;
+        match self.try_run(cloud, frame_index, clock) {
+            Ok(estimate) => estimate,
+            Err(status) => Estimate::failed(status, method),
+        }
+    }
+
+    /// The stages in the paper's order; the error is the status to report.
+    fn try_run(
+        &mut self,
+        cloud: &CloudView<'_>,
+        frame_index: u64,
+        clock: &mut Stopwatch,
+    ) -> Result<Estimate, EstimateStatus> {
         if !cloud.is_well_formed() {
-            return Estimate::failed(EstimateStatus::BadFrame, method);
+            return Err(EstimateStatus::BadFrame);
         }
         let mut rng = ChaCha8Rng::seed_from_u64(self.config.seed);
-        // 1. Statistical outlier removal.
+        rng.set_stream(frame_index);
+        self.remove_outliers(cloud)?;
+        clock.lap("outlier");
+        self.segmenter
+            .segment(cloud, &self.keep, &self.config.ransac, &mut rng);
+        clock.lap("ransac");
+        self.summarize_planes(cloud);
+        let mount_up = cloud.mount.up_vector().map(Vector3::from);
+        let selection = select_planes(
+            &self.summaries,
+            mount_up,
+            Some(cloud.mount.height_m),
+            &self.config.selection,
+        );
+        clock.lap("selection");
+        let selection = selection?;
+        let planes = self.segmenter.planes();
+        let inclined = PlaneSegment::of(
+            &planes[selection.inclined],
+            &self.summaries[selection.inclined],
+        );
+        let ground = match &selection.ground {
+            Ground::Planes(members) => Some(PlaneSegment::joined(
+                planes,
+                &self.summaries,
+                members,
+                &mut self.ground_pixels,
+            )),
+            Ground::Mount => None,
+        };
+        let fit = match self.config.method {
+            SlopeMethod::Paper => self.paper.fit(
+                cloud,
+                &inclined,
+                ground.as_ref(),
+                &selection,
+                &self.config,
+                &mut rng,
+                clock,
+            )?,
+            method => {
+                let fit = baseline_fit(cloud, &inclined, ground.as_ref(), &selection, method);
+                clock.lap("fit");
+                fit
+            }
+        };
+        let estimate = finish(
+            cloud,
+            self.config.method,
+            &fit,
+            &inclined,
+            ground.as_ref(),
+            &selection,
+        )?;
+        clock.lap("confidence");
+        Ok(estimate)
+    }
+
+    /// Stage 1 into `self.keep`; too few points left is an error.
+    fn remove_outliers(&mut self, cloud: &CloudView<'_>) -> Result<(), EstimateStatus> {
         let kept = if self.config.outlier.enabled {
             self.outlier
                 .filter(cloud, &self.config.outlier, &mut self.keep)
@@ -206,192 +305,237 @@ impl Estimator {
             self.keep.extend(cloud.points.iter().map(is_measured));
             self.keep.iter().filter(|&&k| k).count()
         };
-        clock.lap("outlier");
         if kept < self.config.ransac.min_plane_points.max(3) {
-            return Estimate::failed(EstimateStatus::TooFewPoints, method);
+            return Err(EstimateStatus::TooFewPoints);
         }
-        // 2. RANSAC planes.
-        let planes = self
-            .segmenter
-            .segment(cloud, &self.keep, &self.config.ransac, &mut rng);
-        clock.lap("ransac");
-        // Plane quality and selection.
+        Ok(())
+    }
+
+    /// What the selection needs of every segmented plane.
+    fn summarize_planes(&mut self, cloud: &CloudView<'_>) {
         let threshold = Threshold::of(&self.config.ransac);
         let bottom_start = (cloud.height - cloud.height / 3) * cloud.width;
         self.summaries.clear();
-        self.summaries.extend(planes.iter().map(|p| {
-            PlaneSummary {
-                plane: p.plane,
-                inliers: p.inliers.len(),
-                bottom_pixels: p
-                    .inliers
-                    .iter()
-                    .filter(|&&i| i as usize >= bottom_start)
-                    .count(),
-                centroid: p.centroid,
-                quality: plane_quality(cloud, &p.plane, &p.inliers, &threshold),
-            }
-        }));
-        let mount_up = cloud.mount.up_vector().map(Vector3::from);
-        let selection = select_planes(
-            &self.summaries,
-            mount_up,
-            Some(cloud.mount.height_m),
-            &self.config.selection,
-        );
-        clock.lap("selection");
-        let selection = match selection {
-            Ok(s) => s,
-            Err(status) => return Estimate::failed(status, method),
-        };
-        let planes = self.segmenter.planes();
-        let inclined_seg = &planes[selection.inclined];
-        // The ground's segments together: pixels, centroid and RMS.
-        let ground_seg = match &selection.ground {
-            Ground::Planes(members) => {
-                self.ground_pixels.clear();
-                let mut weighted = (Vector3::zeros(), 0.0);
-                for &k in members {
-                    let p = &planes[k];
-                    self.ground_pixels.extend_from_slice(&p.inliers);
-                    let n = p.inliers.len() as f64;
-                    weighted.0 += p.centroid * n;
-                    weighted.1 += p.rms_m.powi(2) * n;
+        self.summaries
+            .extend(self.segmenter.planes().iter().map(|p| {
+                PlaneSummary {
+                    plane: p.plane,
+                    inliers: p.inliers.len(),
+                    bottom_pixels: p
+                        .inliers
+                        .iter()
+                        .filter(|&&i| i as usize >= bottom_start)
+                        .count(),
+                    centroid: p.centroid,
+                    quality: plane_quality(cloud, &p.plane, &p.inliers, &threshold),
                 }
-                self.ground_pixels.sort_unstable();
-                let n = self.ground_pixels.len().max(1) as f64;
-                Some(PlaneSegment {
-                    inliers: &self.ground_pixels,
-                    centroid: weighted.0 / n,
-                    rms_m: (weighted.1 / n).sqrt(),
-                })
-            }
-            Ground::Mount => None,
-        };
-        let inclined_seg = PlaneSegment {
-            inliers: &inclined_seg.inliers,
-            centroid: inclined_seg.centroid,
-            rms_m: inclined_seg.rms_m,
-        };
-        let fits = match method {
-            SlopeMethod::Paper => {
-                let cfg = &self.config;
-                let Some(incl) = paper_plane_normals(
-                    cloud,
-                    &inclined_seg,
-                    cfg,
-                    &mut self.pass_through,
-                    &mut self.normals,
-                    &mut self.kmeans,
-                    &mut self.inclined_normals,
-                    clock,
-                ) else {
-                    return Estimate::failed(EstimateStatus::NoInclinedPlane, method);
-                };
-                let ground = match &ground_seg {
-                    Some(g) => {
-                        let Some(n) = paper_plane_normals(
-                            cloud,
-                            g,
-                            cfg,
-                            &mut self.pass_through,
-                            &mut self.normals,
-                            &mut self.kmeans,
-                            &mut self.ground_normals,
-                            clock,
-                        ) else {
-                            return Estimate::failed(EstimateStatus::NoGround, method);
-                        };
-                        Some(n)
-                    }
-                    None => {
-                        self.ground_normals.clear();
-                        self.ground_normals.push(selection.up);
-                        None
-                    }
-                };
-                let axis = cfg
-                    .cumulative
-                    .about_axis
-                    .then(|| rotation_axis(&ground.unwrap_or(selection.up), &incl))
-                    .flatten();
-                let Some(summary) = cumulative_angle(
-                    &self.inclined_normals,
-                    &self.ground_normals,
-                    cfg.cumulative.draws,
-                    axis.as_ref(),
-                    &mut rng,
-                ) else {
-                    return Estimate::failed(EstimateStatus::NoInclinedPlane, method);
-                };
-                clock.lap("cumulative");
-                let incl_plane = Plane::from_point_normal(&inclined_seg.centroid, &incl);
-                let ground_plane = ground.and_then(|n| {
-                    ground_seg
-                        .as_ref()
-                        .and_then(|g| Plane::from_point_normal(&g.centroid, &n))
-                });
-                (
-                    incl_plane,
-                    ground_plane,
-                    summary.mean_deg,
-                    summary.std_deg,
-                    summary.samples,
-                )
-            }
-            SlopeMethod::LeastSquares | SlopeMethod::Tls => {
-                let fit = |inliers: &[u32]| {
-                    let mut m = Moments::new();
-                    for &i in inliers {
-                        if let Some(p) = cloud.points.get(i as usize).filter(|p| is_measured(p)) {
-                            m.add(&to_vec3(p));
-                        }
-                    }
-                    let plane = if method == SlopeMethod::Tls {
-                        fit_tls(&m)
-                    } else {
-                        fit_least_squares(&m)
-                    };
-                    plane.map(|p| p.oriented_towards(&Vector3::zeros()))
-                };
-                let incl_plane = fit(inclined_seg.inliers);
-                let ground_plane = ground_seg.as_ref().and_then(|g| fit(g.inliers));
-                clock.lap("fit");
-                let up = ground_plane.map_or(selection.up, |g| g.normal);
-                let angle = incl_plane.map_or(f64::NAN, |p| angle_between_deg(&p.normal, &up));
-                (incl_plane, ground_plane, angle, 0.0, 1)
+            }));
+    }
+}
+
+/// The planes a method fitted and the angle between them.
+struct Fit {
+    inclined: Option<Plane>,
+    ground: Option<Plane>,
+    angle_deg: f64,
+    std_deg: f64,
+    samples: u32,
+}
+
+/// The buffers of the paper method's stages 3-6.
+#[derive(Debug, Clone, Default)]
+struct PaperStages {
+    pass_through: PassThrough,
+    normals: NormalEstimator,
+    kmeans: CosineKmeans,
+    ground_normals: Vec<Vector3<f64>>,
+    inclined_normals: Vec<Vector3<f64>>,
+}
+
+impl PaperStages {
+    /// Pass-through, normals and k-means on both planes, then the
+    /// cumulative angle (`ground` `None`: the selection's up vector).
+    #[allow(clippy::too_many_arguments)]
+    fn fit(
+        &mut self,
+        cloud: &CloudView<'_>,
+        inclined: &PlaneSegment<'_>,
+        ground: Option<&PlaneSegment<'_>>,
+        selection: &Selection,
+        config: &EstimatorConfig,
+        rng: &mut ChaCha8Rng,
+        clock: &mut Stopwatch,
+    ) -> Result<Fit, EstimateStatus> {
+        let incl = self
+            .plane_normals(cloud, inclined, config, true, clock)
+            .ok_or(EstimateStatus::NoInclinedPlane)?;
+        let ground_normal = match ground {
+            Some(g) => Some(
+                self.plane_normals(cloud, g, config, false, clock)
+                    .ok_or(EstimateStatus::NoGround)?,
+            ),
+            None => {
+                self.ground_normals.clear();
+                self.ground_normals.push(selection.up);
+                None
             }
         };
-        let (incl_plane, ground_plane, angle, std, samples) = fits;
-        let Some(incl_plane) = incl_plane.map(|p| p.oriented_towards(&Vector3::zeros())) else {
-            return Estimate::failed(EstimateStatus::NoInclinedPlane, method);
+        let axis = config
+            .cumulative
+            .about_axis
+            .then(|| rotation_axis(&ground_normal.unwrap_or(selection.up), &incl))
+            .flatten();
+        let summary = cumulative_angle(
+            &self.inclined_normals,
+            &self.ground_normals,
+            config.cumulative.draws,
+            axis.as_ref(),
+            rng,
+        )
+        .ok_or(EstimateStatus::NoInclinedPlane)?;
+        clock.lap("cumulative");
+        Ok(Fit {
+            inclined: Plane::from_point_normal(&inclined.centroid, &incl),
+            ground: ground_normal
+                .zip(ground)
+                .and_then(|(n, g)| Plane::from_point_normal(&g.centroid, &n)),
+            angle_deg: summary.mean_deg,
+            std_deg: summary.std_deg,
+            samples: summary.samples,
+        })
+    }
+
+    /// Pass-through, normals and cosine k-means for one plane: fills the
+    /// inclined or ground normal buffer with the dominant cluster's normals
+    /// and returns its (unit) mean.
+    fn plane_normals(
+        &mut self,
+        cloud: &CloudView<'_>,
+        segment: &PlaneSegment<'_>,
+        config: &EstimatorConfig,
+        inclined: bool,
+        clock: &mut Stopwatch,
+    ) -> Option<Vector3<f64>> {
+        let out = if inclined {
+            &mut self.inclined_normals
+        } else {
+            &mut self.ground_normals
         };
-        if ground_seg.is_some() && ground_plane.is_none() {
-            return Estimate::failed(EstimateStatus::NoGround, method);
-        }
-        let ground_plane = ground_plane.map(|p| p.oriented_towards(&Vector3::zeros()));
-        let sign = slope_sign(&incl_plane.normal, &selection.forward);
-        Estimate {
-            status: EstimateStatus::Ok,
-            method,
-            slope_deg: sign * angle,
-            slope_std_deg: std,
-            samples,
-            distance_m: axis_distance(&incl_plane),
-            ground: ground_plane
-                .zip(ground_seg.as_ref())
-                .map(|(p, g)| PlaneEstimate {
-                    coefficients: p.coefficients(),
-                    inliers: u32::try_from(g.inliers.len()).unwrap_or(u32::MAX),
-                }),
-            inclined: Some(PlaneEstimate {
-                coefficients: incl_plane.coefficients(),
-                inliers: u32::try_from(inclined_seg.inliers.len()).unwrap_or(u32::MAX),
-            }),
-            ground_from_mount: ground_seg.is_none(),
-            timings: StageTimings::default(),
+        out.clear();
+        let inliers = segment.inliers;
+        let (members, _) =
+            self.pass_through
+                .filter(cloud.points, inliers, config.pass_through.max_points);
+        clock.lap("pass_through");
+        // The patch grows with the plane's own noise.
+        let normals_config = config.normals.for_plane_noise(segment.rms_m);
+        let (found, _) = self.normals.estimate_with_support(
+            cloud,
+            members,
+            inliers,
+            &normals_config,
+            &Vector3::zeros(),
+        );
+        clock.lap("normals");
+        let clustering = self.kmeans.cluster(
+            found,
+            config.kmeans.clusters,
+            config.kmeans.max_iterations,
+            config.kmeans.merge_spread_ratio,
+        );
+        let result = clustering.and_then(|c| {
+            out.extend(self.kmeans.kept_members(&c).copied());
+            out.iter().sum::<Vector3<f64>>().try_normalize(1e-12)
+        });
+        clock.lap("kmeans");
+        result
+    }
+}
+
+/// The least-squares or TLS baseline: each plane's inliers fitted.
+fn baseline_fit(
+    cloud: &CloudView<'_>,
+    inclined: &PlaneSegment<'_>,
+    ground: Option<&PlaneSegment<'_>>,
+    selection: &Selection,
+    method: SlopeMethod,
+) -> Fit {
+    let fit = |inliers: &[u32]| fit_inliers(cloud, inliers, method);
+    let incl_plane = fit(inclined.inliers);
+    let ground_plane = ground.and_then(|g| fit(g.inliers));
+    let up = ground_plane.map_or(selection.up, |g| g.normal);
+    Fit {
+        inclined: incl_plane,
+        ground: ground_plane,
+        angle_deg: incl_plane.map_or(f64::NAN, |p| angle_between_deg(&p.normal, &up)),
+        std_deg: 0.0,
+        samples: 1,
+    }
+}
+
+/// The estimate from a method's fit: sign, distance, planes and confidence
+/// (the paper method checked against a TLS fit of the same pixels).
+fn finish(
+    cloud: &CloudView<'_>,
+    method: SlopeMethod,
+    fit: &Fit,
+    inclined: &PlaneSegment<'_>,
+    ground: Option<&PlaneSegment<'_>>,
+    selection: &Selection,
+) -> Result<Estimate, EstimateStatus> {
+    let incl_plane = fit
+        .inclined
+        .map(|p| p.oriented_towards(&Vector3::zeros()))
+        .ok_or(EstimateStatus::NoInclinedPlane)?;
+    if ground.is_some() && fit.ground.is_none() {
+        return Err(EstimateStatus::NoGround);
+    }
+    let ground_plane = fit.ground.map(|p| p.oriented_towards(&Vector3::zeros()));
+    let method_difference_deg = (method == SlopeMethod::Paper).then(|| {
+        let tls = |inliers: &[u32]| fit_inliers(cloud, inliers, SlopeMethod::Tls);
+        let up = ground.map_or(Some(selection.up), |g| tls(g.inliers).map(|p| p.normal));
+        let check = tls(inclined.inliers)
+            .zip(up)
+            .map_or(f64::NAN, |(p, up)| angle_between_deg(&p.normal, &up));
+        fit.angle_deg - check
+    });
+    let confidence = confidence(
+        &inclined.chosen(),
+        ground.map(PlaneSegment::chosen).as_ref(),
+        method_difference_deg,
+    );
+    Ok(Estimate {
+        status: EstimateStatus::Ok,
+        method,
+        slope_deg: slope_sign(&incl_plane.normal, &selection.forward) * fit.angle_deg,
+        slope_std_deg: fit.std_deg,
+        samples: fit.samples,
+        distance_m: axis_distance(&incl_plane),
+        ground: ground_plane.zip(ground).map(|(p, g)| g.estimate(&p)),
+        inclined: Some(inclined.estimate(&incl_plane)),
+        ground_from_mount: ground.is_none(),
+        confidence: confidence.value,
+        confidence_reasons: confidence.reasons,
+        tracked: None,
+        timings: StageTimings::default(),
+    })
+}
+
+/// A least-squares or TLS plane through the measured `inliers`, oriented
+/// towards the camera.
+fn fit_inliers(cloud: &CloudView<'_>, inliers: &[u32], method: SlopeMethod) -> Option<Plane> {
+    let mut m = Moments::new();
+    for &i in inliers {
+        if let Some(p) = cloud.points.get(i as usize).filter(|p| is_measured(p)) {
+            m.add(&to_vec3(p));
         }
     }
+    let plane = if method == SlopeMethod::LeastSquares {
+        fit_least_squares(&m)
+    } else {
+        fit_tls(&m)
+    };
+    plane.map(|p| p.oriented_towards(&Vector3::zeros()))
 }
 
 /// The pixels of a chosen plane (one RANSAC plane, or the ground's
@@ -400,43 +544,70 @@ struct PlaneSegment<'a> {
     inliers: &'a [u32],
     centroid: Vector3<f64>,
     rms_m: f64,
+    quality: PlaneQuality,
 }
 
-/// Pass-through, normals and cosine k-means for one plane: fills `out` with
-/// the dominant cluster's normals and returns its (unit) mean.
-#[allow(clippy::too_many_arguments)]
-fn paper_plane_normals(
-    cloud: &CloudView<'_>,
-    segment: &PlaneSegment<'_>,
-    config: &EstimatorConfig,
-    pass_through: &mut PassThrough,
-    normals: &mut NormalEstimator,
-    kmeans: &mut CosineKmeans,
-    out: &mut Vec<Vector3<f64>>,
-    clock: &mut Stopwatch,
-) -> Option<Vector3<f64>> {
-    out.clear();
-    let inliers = segment.inliers;
-    let (members, _) = pass_through.filter(cloud.points, inliers, config.pass_through.max_points);
-    clock.lap("pass_through");
-    // The patch grows with the plane's own noise.
-    let normals_config = config.normals.for_plane_noise(segment.rms_m);
-    let (found, _) =
-        normals.estimate_with_support(cloud, members, inliers, &normals_config, &Vector3::zeros());
-    clock.lap("normals");
-    let clustering = kmeans.cluster(
-        found,
-        config.kmeans.clusters,
-        config.kmeans.max_iterations,
-        config.kmeans.merge_spread_ratio,
-    );
-    let result = clustering.and_then(|c| {
-        out.extend(kmeans.kept_members(&c).copied());
-        let mean = out.iter().sum::<Vector3<f64>>();
-        mean.try_normalize(1e-12)
-    });
-    clock.lap("kmeans");
-    result
+impl<'a> PlaneSegment<'a> {
+    /// One RANSAC plane.
+    fn of(plane: &'a SegmentedPlane, summary: &PlaneSummary) -> Self {
+        Self {
+            inliers: &plane.inliers,
+            centroid: plane.centroid,
+            rms_m: plane.rms_m,
+            quality: summary.quality,
+        }
+    }
+
+    /// The planes `members` together (the ground's segments): their pixels
+    /// in pixel order (into `pixels`), centroid, RMS and quality.
+    fn joined(
+        planes: &[SegmentedPlane],
+        summaries: &[PlaneSummary],
+        members: &[usize],
+        pixels: &'a mut Vec<u32>,
+    ) -> Self {
+        pixels.clear();
+        let mut centroid = Vector3::zeros();
+        let mut quality = PlaneQuality::default();
+        let (mut rms2, mut relative2) = (0.0, 0.0);
+        for &k in members {
+            let (p, q) = (&planes[k], &summaries[k].quality);
+            pixels.extend_from_slice(&p.inliers);
+            let n = p.inliers.len() as f64;
+            centroid += p.centroid * n;
+            rms2 += p.rms_m.powi(2) * n;
+            relative2 += q.relative_rms.powi(2) * n;
+            quality.area_m2 += q.area_m2;
+            quality.border_fraction += q.border_fraction * n;
+        }
+        pixels.sort_unstable();
+        let n = pixels.len().max(1) as f64;
+        quality.rms_m = (rms2 / n).sqrt();
+        quality.relative_rms = (relative2 / n).sqrt();
+        quality.border_fraction /= n;
+        Self {
+            inliers: pixels,
+            centroid: centroid / n,
+            rms_m: quality.rms_m,
+            quality,
+        }
+    }
+
+    fn chosen(&self) -> ChosenPlane {
+        ChosenPlane {
+            pixels: self.inliers.len(),
+            quality: self.quality,
+        }
+    }
+
+    fn estimate(&self, plane: &Plane) -> PlaneEstimate {
+        PlaneEstimate {
+            coefficients: plane.coefficients(),
+            inliers: u32::try_from(self.inliers.len()).unwrap_or(u32::MAX),
+            rms_m: self.rms_m,
+            area_m2: self.quality.area_m2,
+        }
+    }
 }
 
 // The estimator daemon moves the estimator into its worker thread.

@@ -15,6 +15,9 @@
 //! | `cumulative_angle.rs` | 6. cumulative averaging of the angle |
 //! | `plane_fit.rs` | TLS and least-squares plane fits (baselines) |
 //! | `selection/` | plane quality; which plane is the ground, which the inclined plane; sign, distance |
+//! | `confidence.rs` | how far to trust an estimate, and why |
+//! | `tracking.rs` | the slope of the plane ahead followed over frames |
+//! | `message.rs` | an estimate written into the `SlopeEstimate` message |
 //! | `estimator.rs` | orchestration and timings |
 
 // `!(x > 0.0)` is how this crate says "not a positive number, NaN
@@ -22,23 +25,26 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod cloud;
+pub mod confidence;
 pub mod config;
 pub mod cosine_kmeans;
 pub mod cumulative_angle;
 pub mod estimator;
 #[doc(hidden)]
 pub mod fixtures;
+pub mod message;
 pub mod normals;
 pub mod pass_through;
 pub mod plane_fit;
 pub mod ransac_planes;
 pub mod selection;
 pub mod statistical_outlier;
+pub mod tracking;
 
 pub use cloud::CloudView;
 pub use config::{
     parse_method, ConfigError, CumulativeConfig, EstimatorConfig, KmeansConfig, NormalsConfig,
-    OutlierConfig, PassThroughConfig, RansacConfig, SelectionConfig,
+    OutlierConfig, PassThroughConfig, RansacConfig, SelectionConfig, TrackingConfig,
 };
-pub use estimator::{Estimate, Estimator, PlaneEstimate, StageTimings};
+pub use estimator::{Estimate, Estimator, FrameInfo, PlaneEstimate, StageTimings};
 pub use slope_ipc_types::{EstimateStatus, SlopeMethod};

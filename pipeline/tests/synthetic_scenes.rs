@@ -218,7 +218,8 @@ fn the_message_carries_the_estimate() {
             "pass_through",
             "normals",
             "kmeans",
-            "cumulative"
+            "cumulative",
+            "confidence"
         ]
     );
     let sum: f64 = e.timings.stages.iter().map(|(_, ms)| ms).sum();

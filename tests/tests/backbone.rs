@@ -72,6 +72,90 @@ fn assert_exits_zero_within(proc: &mut Proc, within: Duration) {
     );
 }
 
+/// Every key of `slope-echo --json`: the fields of `slope.SlopeEstimate.v2`.
+const ECHO_KEYS: [&str; 28] = [
+    "frame",
+    "timestamp_ns",
+    "publish_stamp_ns",
+    "source_stamp_ns",
+    "status",
+    "method",
+    "slope_deg",
+    "std_deg",
+    "distance_m",
+    "latency_ms",
+    "dropped_frames",
+    "ground_plane",
+    "inclined_plane",
+    "ground_inliers",
+    "inclined_inliers",
+    "ground_rms_m",
+    "inclined_rms_m",
+    "ground_area_m2",
+    "inclined_area_m2",
+    "samples",
+    "ground_from_mount",
+    "processing_ms",
+    "confidence",
+    "confidence_reasons",
+    "tracked_slope_deg",
+    "tracked_std_deg",
+    "tracked_frames",
+    "tracked_accepted",
+];
+
+fn number(e: &Value, key: &str) -> f64 {
+    e[key]
+        .as_f64()
+        .unwrap_or_else(|| panic!("{key} is not a number: {e}"))
+}
+
+/// The version 2 fields of an `ok` estimate that crossed the processes:
+/// both planes (unit normals, camera on their positive side), their
+/// quality, the confidence and the tracked slope.
+fn check_v2_fields(e: &Value, truth: f64) {
+    let mut found: Vec<&str> = e
+        .as_object()
+        .expect("an object")
+        .keys()
+        .map(String::as_str)
+        .collect();
+    let mut expected = ECHO_KEYS.to_vec();
+    expected.sort_unstable();
+    found.sort_unstable();
+    assert_eq!(found, expected, "{e}");
+    for plane in ["ground", "inclined"] {
+        let coefficients: Vec<f64> = e[format!("{plane}_plane").as_str()]
+            .as_array()
+            .unwrap_or_else(|| panic!("no {plane} plane: {e}"))
+            .iter()
+            .map(|c| c.as_f64().expect("a number"))
+            .collect();
+        assert_eq!(coefficients.len(), 4, "{e}");
+        let norm = coefficients[..3].iter().map(|c| c * c).sum::<f64>().sqrt();
+        assert!((norm - 1.0).abs() < 1e-9, "{plane} normal {norm}: {e}");
+        assert!(coefficients[3] > 0.0, "{plane} d: {e}");
+        assert!(
+            e[format!("{plane}_inliers").as_str()].as_u64() > Some(0),
+            "{e}"
+        );
+        assert!(number(e, &format!("{plane}_rms_m")) >= 0.0, "{e}");
+        assert!(number(e, &format!("{plane}_area_m2")) > 0.0, "{e}");
+    }
+    let confidence = number(e, "confidence");
+    assert!((0.0..=1.0).contains(&confidence), "{e}");
+    assert!(e["confidence_reasons"].is_array(), "{e}");
+    // The estimator tracks over the stream; a track counts at most the
+    // frames seen so far, and follows the ramp.
+    let frame = e["frame"].as_u64().expect("frame is a number");
+    let tracked_frames = e["tracked_frames"].as_u64().expect("a count");
+    assert!(tracked_frames <= frame + 1, "{e}");
+    assert!(e["tracked_accepted"].is_boolean(), "{e}");
+    if let Some(tracked) = e["tracked_slope_deg"].as_f64() {
+        assert!((tracked - truth).abs() <= 1.0, "{e}");
+    }
+}
+
 fn truth_of(dir: &Path) -> f64 {
     let rec = Recording::open(dir).expect("bundled recording opens");
     rec.meta()
@@ -141,6 +225,7 @@ fn every_frame_gives_one_estimate_in_order_within_a_degree() {
         let latency = e["latency_ms"].as_f64().expect("latency is a number");
         assert!(latency > 0.0 && latency < 5_000.0, "latency {latency}");
         assert_eq!(e["dropped_frames"], 0, "{e}");
+        check_v2_fields(e, truth);
     }
 
     assert_exits_zero_within(&mut echo, Duration::from_secs(5));

@@ -176,8 +176,14 @@ fn line_for(estimate: &SlopeEstimate, truth: Option<f64>) -> String {
         let error = truth.map_or(String::new(), |t| {
             format!("  error {:5.2}°", (estimate.slope_deg.abs() - t).abs())
         });
+        // The tracked slope once the estimator follows one.
+        let tracked = if estimate.has_tracked_slope() {
+            format!("  tracked {:+7.2}°", estimate.tracked_slope_deg)
+        } else {
+            String::new()
+        };
         format!(
-            "{head}  slope {:+7.2}° ± {:4.2}°  {truth_text}{error}  {latency}",
+            "{head}  slope {:+7.2}° ± {:4.2}°{tracked}  {truth_text}{error}  {latency}",
             estimate.slope_deg, estimate.slope_std_deg
         )
     } else {

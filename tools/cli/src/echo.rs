@@ -22,9 +22,15 @@ use crate::replay::positive_f64;
   slope-echo --json | jq .slope_deg   # one JSON object per line
   slope-echo --count 10 --timeout 5   # ten estimates, fail if they take over 5 s
 
-JSON fields: frame, timestamp_ns (capture, ns since the Unix epoch), status, method, \
-slope_deg, std_deg, distance_m, latency_ms (capture to publish), dropped_frames, \
-ground_inliers, inclined_inliers, samples, ground_from_mount, processing_ms."
+Readable lines show the slope ± its spread, the distance ahead, the tracked slope ± its \
+spread (- without a track) and the confidence (with the reasons when below 1).
+
+JSON fields: frame, timestamp_ns (capture, ns since the Unix epoch), publish_stamp_ns, \
+source_stamp_ns, status, method, slope_deg, std_deg, distance_m, latency_ms (capture to \
+publish), dropped_frames, ground_plane, inclined_plane ([a, b, c, d] or null), ground_inliers, \
+inclined_inliers, ground_rms_m, inclined_rms_m, ground_area_m2, inclined_area_m2, samples, \
+ground_from_mount, processing_ms, confidence, confidence_reasons (names), tracked_slope_deg, \
+tracked_std_deg, tracked_frames, tracked_accepted."
 )]
 pub struct EchoArgs {
     /// One JSON object per line instead of readable text.
@@ -44,11 +50,14 @@ pub struct EchoArgs {
     pub common: CommonArgs,
 }
 
-/// The JSON form of one estimate (`slope-echo --json`).
+/// The JSON form of one estimate (`slope-echo --json`): every field of the
+/// message; NaN values and absent planes are `null`.
 #[derive(Debug, Serialize)]
 pub struct EstimateJson {
     pub frame: u64,
     pub timestamp_ns: u64,
+    pub publish_stamp_ns: u64,
+    pub source_stamp_ns: u64,
     pub status: &'static str,
     pub method: &'static str,
     pub slope_deg: Option<f64>,
@@ -56,15 +65,32 @@ pub struct EstimateJson {
     pub distance_m: Option<f64>,
     pub latency_ms: f64,
     pub dropped_frames: u64,
+    pub ground_plane: Option<[f64; 4]>,
+    pub inclined_plane: Option<[f64; 4]>,
     pub ground_inliers: u32,
     pub inclined_inliers: u32,
+    pub ground_rms_m: Option<f64>,
+    pub inclined_rms_m: Option<f64>,
+    pub ground_area_m2: Option<f64>,
+    pub inclined_area_m2: Option<f64>,
     pub samples: u32,
     pub ground_from_mount: bool,
     pub processing_ms: f64,
+    pub confidence: f64,
+    pub confidence_reasons: Vec<&'static str>,
+    pub tracked_slope_deg: Option<f64>,
+    pub tracked_std_deg: Option<f64>,
+    pub tracked_frames: u32,
+    pub tracked_accepted: bool,
 }
 
 fn finite(value: f64) -> Option<f64> {
     value.is_finite().then_some(value)
+}
+
+/// A plane of the message, `None` when absent (all zero).
+fn plane(coefficients: [f64; 4]) -> Option<[f64; 4]> {
+    (coefficients != [0.0; 4]).then_some(coefficients)
 }
 
 impl From<&SlopeEstimate> for EstimateJson {
@@ -72,6 +98,8 @@ impl From<&SlopeEstimate> for EstimateJson {
         Self {
             frame: e.frame_index,
             timestamp_ns: e.capture_stamp_ns,
+            publish_stamp_ns: e.publish_stamp_ns,
+            source_stamp_ns: e.source_stamp_ns,
             status: e.status().name(),
             method: e.method().map_or("unknown", |m| m.name()),
             slope_deg: finite(e.slope_deg),
@@ -79,11 +107,23 @@ impl From<&SlopeEstimate> for EstimateJson {
             distance_m: finite(e.distance_m),
             latency_ms: e.latency_ms(),
             dropped_frames: e.dropped_frames,
+            ground_plane: plane(e.ground_plane),
+            inclined_plane: plane(e.inclined_plane),
             ground_inliers: e.ground_inliers,
             inclined_inliers: e.inclined_inliers,
+            ground_rms_m: finite(e.ground_rms_m),
+            inclined_rms_m: finite(e.inclined_rms_m),
+            ground_area_m2: finite(e.ground_area_m2),
+            inclined_area_m2: finite(e.inclined_area_m2),
             samples: e.samples,
             ground_from_mount: e.ground_from_mount != 0,
             processing_ms: e.processing_us as f64 / 1000.0,
+            confidence: e.confidence,
+            confidence_reasons: e.confidence_reason_names().collect(),
+            tracked_slope_deg: finite(e.tracked_slope_deg),
+            tracked_std_deg: finite(e.tracked_std_deg),
+            tracked_frames: e.tracked_frames,
+            tracked_accepted: e.tracked_accepted != 0,
         }
     }
 }
@@ -104,12 +144,40 @@ pub fn format_line(e: &SlopeEstimate) -> String {
             "  -   ".to_string()
         };
         format!(
-            "{head}  slope {:+7.2}° ± {:5.2}°  ahead {distance}  {tail}",
-            e.slope_deg, e.slope_std_deg
+            "{head}  slope {:+7.2}° ± {:5.2}°  ahead {distance}  {}  {}  {tail}",
+            e.slope_deg,
+            e.slope_std_deg,
+            tracked_text(e),
+            confidence_text(e)
         )
     } else {
         format!("{head}  {:<30} {tail}", status.name())
     }
+}
+
+/// `confidence 0.62 (few_points, rough_plane)`: the reasons only when the
+/// confidence is below 1.
+fn confidence_text(e: &SlopeEstimate) -> String {
+    let text = format!("confidence {:4.2}", e.confidence);
+    let reasons: Vec<&str> = e.confidence_reason_names().collect();
+    if e.confidence < 1.0 && !reasons.is_empty() {
+        format!("{text} ({})", reasons.join(", "))
+    } else {
+        text
+    }
+}
+
+/// `tracked +16.00° ±  0.05°`, or `tracked -` without a tracked slope.
+fn tracked_text(e: &SlopeEstimate) -> String {
+    if !e.has_tracked_slope() {
+        return "tracked -".to_string();
+    }
+    let spread = if e.tracked_std_deg.is_finite() {
+        format!(" ± {:5.2}°", e.tracked_std_deg)
+    } else {
+        String::new()
+    };
+    format!("tracked {:+7.2}°{spread}", e.tracked_slope_deg)
 }
 
 pub fn run(args: &EchoArgs, stop: &StopFlag) -> anyhow::Result<u64> {
@@ -161,4 +229,104 @@ pub fn run(args: &EchoArgs, stop: &StopFlag) -> anyhow::Result<u64> {
         }
     }
     Ok(received)
+}
+
+#[cfg(test)]
+mod tests {
+    use slope_ipc_types::{confidence, SlopeMethod};
+
+    use super::*;
+
+    fn ok_estimate() -> SlopeEstimate {
+        SlopeEstimate {
+            frame_index: 12,
+            capture_stamp_ns: 1_000_000_000,
+            publish_stamp_ns: 1_020_000_000,
+            status: EstimateStatus::Ok as u32,
+            method: SlopeMethod::Paper as u32,
+            slope_deg: 16.02,
+            slope_std_deg: 0.2,
+            distance_m: 1.52,
+            ground_plane: [0.0, -0.94, 0.34, 0.5],
+            inclined_plane: [0.0, -0.7, -0.7, 1.2],
+            ground_inliers: 40_000,
+            inclined_inliers: 9_000,
+            ground_rms_m: 0.002,
+            inclined_rms_m: 0.003,
+            ground_area_m2: 3.5,
+            inclined_area_m2: 0.8,
+            samples: 1000,
+            processing_us: 25_000,
+            confidence: 0.62,
+            confidence_reasons: confidence::FEW_POINTS | confidence::ROUGH_PLANE,
+            tracked_slope_deg: 16.0,
+            tracked_std_deg: 0.05,
+            tracked_frames: 9,
+            tracked_accepted: 1,
+            ..SlopeEstimate::default()
+        }
+    }
+
+    #[test]
+    fn the_line_shows_confidence_reasons_and_the_tracked_slope() {
+        let line = format_line(&ok_estimate());
+        assert!(line.contains("slope  +16.02° ±  0.20°"), "{line}");
+        assert!(line.contains("tracked  +16.00° ±  0.05°"), "{line}");
+        assert!(
+            line.contains("confidence 0.62 (few_points, rough_plane)"),
+            "{line}"
+        );
+        let sure = SlopeEstimate {
+            confidence: 1.0,
+            confidence_reasons: 0,
+            tracked_slope_deg: f64::NAN,
+            tracked_std_deg: f64::NAN,
+            ..ok_estimate()
+        };
+        let line = format_line(&sure);
+        assert!(
+            line.contains("tracked -  confidence 1.00  latency"),
+            "{line}"
+        );
+    }
+
+    #[test]
+    fn json_has_every_field_and_null_for_what_is_absent() {
+        let value = serde_json::to_value(EstimateJson::from(&ok_estimate())).unwrap();
+        assert_eq!(value["confidence"], 0.62);
+        assert_eq!(
+            value["confidence_reasons"],
+            serde_json::json!(["few_points", "rough_plane"])
+        );
+        assert_eq!(
+            value["inclined_plane"],
+            serde_json::json!([0.0, -0.7, -0.7, 1.2])
+        );
+        assert_eq!(value["ground_rms_m"], 0.002);
+        assert_eq!(value["inclined_area_m2"], 0.8);
+        assert_eq!(value["tracked_slope_deg"], 16.0);
+        assert_eq!(value["tracked_frames"], 9);
+        assert_eq!(value["tracked_accepted"], true);
+        assert_eq!(value["publish_stamp_ns"], 1_020_000_000u64);
+        assert_eq!(value.as_object().unwrap().len(), 28);
+
+        let failed = SlopeEstimate {
+            status: EstimateStatus::NoInclinedPlane as u32,
+            ..SlopeEstimate::default()
+        };
+        let value = serde_json::to_value(EstimateJson::from(&failed)).unwrap();
+        for key in [
+            "slope_deg",
+            "ground_plane",
+            "inclined_plane",
+            "ground_rms_m",
+            "inclined_area_m2",
+            "tracked_slope_deg",
+            "tracked_std_deg",
+        ] {
+            assert!(value[key].is_null(), "{key}: {value}");
+        }
+        assert_eq!(value["confidence_reasons"], serde_json::json!([]));
+        assert_eq!(value["tracked_accepted"], false);
+    }
 }

@@ -11,7 +11,7 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::Parser;
 use slope_ipc_types::{SlopeEstimate, SlopeMethod};
-use slope_pipeline::{parse_method, CloudView, Estimator, EstimatorConfig};
+use slope_pipeline::{parse_method, CloudView, Estimator, EstimatorConfig, FrameInfo};
 use slope_sensor::ipc::{create_node, CloudSubscriber, EstimatePublisher};
 use slope_sensor::publish::StopFlag;
 
@@ -156,7 +156,13 @@ impl Worker<'_> {
             "processing cloud in place"
         );
         let view = CloudView::from_header(&header, points);
-        let estimate = self.estimator.estimate(&view);
+        // The frame index seeds this frame's random draws; the tracker
+        // follows the slope over the stream.
+        let frame = FrameInfo {
+            index: header.frame_index,
+            stamp_ns: header.capture_stamp_ns,
+        };
+        let estimate = self.estimator.estimate_frame(&view, frame);
         let mut message = SlopeEstimate {
             frame_index: header.frame_index,
             capture_stamp_ns: header.capture_stamp_ns,
@@ -172,6 +178,8 @@ impl Worker<'_> {
             frame = sent.frame_index,
             status = sent.status().name(),
             slope_deg = sent.slope_deg,
+            confidence = sent.confidence,
+            tracked_slope_deg = sent.tracked_slope_deg,
             ms = estimate.timings.total_ms,
             "published estimate"
         );

@@ -4,7 +4,11 @@
 //! optionally as pictures of the planes found.
 //!
 //! Per frame: decode the depth PNG, project it with the recording's
-//! intrinsics, run one [`Estimator`] per method on the same cloud. A frame
+//! intrinsics, run one [`Estimator`] per method on the same cloud
+//! ([`Estimator::estimate_frame`] with the frame's index and timestamp from
+//! frames.csv). Each recording gets fresh estimators that see its frames in
+//! order, so the tracked slope follows the recording as it would follow the
+//! camera, and never carries over from one recording to the next. A frame
 //! whose image cannot be read is reported as `bad_frame` with the reader's
 //! error and the evaluation goes on; a recording that cannot be opened is
 //! reported by name, the others are still evaluated, and the program exits
@@ -25,7 +29,10 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
 use slope_ipc_types::{CloudPoint, EstimateStatus, Mount, SlopeMethod, DEFAULT_SERVICE_PREFIX};
-use slope_pipeline::{CloudView, Estimate, Estimator, EstimatorConfig, StageTimings};
+use slope_pipeline::tracking::TrackedSlope;
+use slope_pipeline::{
+    CloudView, Estimate, Estimator, EstimatorConfig, FrameInfo, PlaneEstimate, StageTimings,
+};
 use slope_sensor::recording::{DepthImage, FrameEntry, Recording};
 
 use crate::cli::CommonArgs;
@@ -36,6 +43,10 @@ use crate::replay::positive_f64;
 
 /// Default distance from a plane within which `--render` tints a pixel.
 pub const DEFAULT_RENDER_TOLERANCE_M: f64 = 0.03;
+
+/// An `ok` frame whose confidence is below this counts as low-confidence in
+/// the summary.
+pub const LOW_CONFIDENCE: f64 = 0.5;
 
 #[derive(Debug, Parser)]
 #[command(
@@ -51,6 +62,10 @@ angle between the two planes, 0..90 degrees) while estimates are signed (+ uphil
 the error is computed on magnitudes:\n  \
 abs_error_deg = | median over ok frames of |slope_deg|  -  truth_deg |\n\
 (median_frame_error_deg in the JSON is the median of the per-frame | |slope_deg| - truth |).\n\n\
+Each recording gets fresh estimators that see its frames in order, so the tracked slope follows \
+the recording. Per frame the JSON also gives both planes ([a, b, c, d], camera frame), their \
+inliers, RMS and area, the confidence and its reasons, ground_from_mount and the tracked slope; \
+the summary counts the ok frames whose confidence is below 0.5 (low_confidence_frames).\n\n\
 A frame whose depth image cannot be read is reported with status bad_frame and its error; the \
 evaluation goes on. A recording that cannot be opened is reported by name, the others are still \
 evaluated, and the exit status is non-zero.",
@@ -181,6 +196,89 @@ pub struct FrameResult {
     pub ms: Option<Timings>,
     /// Why the frame is `bad_frame`.
     pub error: Option<String>,
+    /// Planes, their quality, confidence and track; all `null` when the
+    /// frame could not be read.
+    #[serde(flatten)]
+    pub details: FrameDetails,
+}
+
+/// What the estimator found besides the slope, for a frame it ran on. Every
+/// field is `None` (`null`) when the frame could not be read; a plane's
+/// fields are also `None` when that plane is absent.
+#[derive(Debug, Clone, PartialEq, Default, Serialize)]
+pub struct FrameDetails {
+    /// `[a, b, c, d]` in the camera frame: `(a, b, c)` a unit normal towards
+    /// the camera side, `d` the camera's distance to the plane.
+    pub ground_plane: Option<[f64; 4]>,
+    /// `[a, b, c, d]` as `ground_plane`.
+    pub inclined_plane: Option<[f64; 4]>,
+    pub ground_inliers: Option<u32>,
+    pub inclined_inliers: Option<u32>,
+    /// RMS distance of the inliers from the plane, metres.
+    pub ground_rms_m: Option<f64>,
+    pub inclined_rms_m: Option<f64>,
+    /// Surface the inliers cover, square metres.
+    pub ground_area_m2: Option<f64>,
+    pub inclined_area_m2: Option<f64>,
+    /// How far to trust `slope_deg`, 0..=1 (0 unless `ok`).
+    pub confidence: Option<f64>,
+    /// Why the confidence is below 1, by name.
+    pub confidence_reasons: Option<Vec<&'static str>>,
+    /// True when the ground normal is the mount's up vector.
+    pub ground_from_mount: Option<bool>,
+    /// The slope tracked over the recording's frames so far.
+    pub tracked: Option<TrackedJson>,
+}
+
+/// The tracked slope after a frame.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TrackedJson {
+    /// Degrees, signed; `None` before the first accepted frame.
+    pub slope_deg: Option<f64>,
+    pub std_deg: Option<f64>,
+    /// Frames accepted into the track since it (re)started.
+    pub frames: u32,
+    /// True when this frame was accepted into the track.
+    pub accepted: bool,
+}
+
+impl From<&TrackedSlope> for TrackedJson {
+    fn from(t: &TrackedSlope) -> Self {
+        Self {
+            slope_deg: t.slope_deg.is_finite().then_some(t.slope_deg),
+            std_deg: t.std_deg.is_finite().then_some(t.std_deg),
+            frames: t.frames,
+            accepted: t.accepted,
+        }
+    }
+}
+
+impl FrameDetails {
+    /// The details of an estimate.
+    pub fn of(estimate: &Estimate) -> Self {
+        let ground = estimate.ground.as_ref();
+        let inclined = estimate.inclined.as_ref();
+        let coefficients = |p: &PlaneEstimate| p.coefficients;
+        let inliers = |p: &PlaneEstimate| p.inliers;
+        let rms = |p: &PlaneEstimate| p.rms_m;
+        let area = |p: &PlaneEstimate| p.area_m2;
+        Self {
+            ground_plane: ground.map(coefficients),
+            inclined_plane: inclined.map(coefficients),
+            ground_inliers: ground.map(inliers),
+            inclined_inliers: inclined.map(inliers),
+            ground_rms_m: ground.map(rms),
+            inclined_rms_m: inclined.map(rms),
+            ground_area_m2: ground.map(area),
+            inclined_area_m2: inclined.map(area),
+            confidence: Some(estimate.confidence),
+            confidence_reasons: Some(
+                slope_ipc_types::confidence::names(estimate.confidence_reasons).collect(),
+            ),
+            ground_from_mount: Some(estimate.ground_from_mount),
+            tracked: estimate.tracked.as_ref().map(TrackedJson::from),
+        }
+    }
 }
 
 /// Stage timings serialised as `{"total": ms, "<stage>": ms, ...}` in
@@ -220,6 +318,8 @@ pub struct Summary {
     pub frames: usize,
     /// Frames with status `ok`.
     pub ok_frames: usize,
+    /// Frames with status `ok` whose confidence is below [`LOW_CONFIDENCE`].
+    pub low_confidence_frames: usize,
     /// Median signed slope of the `ok` frames, degrees.
     pub median_slope_deg: Option<f64>,
     /// Median of `|slope_deg|` over the `ok` frames, degrees.
@@ -328,9 +428,15 @@ pub fn summarize(frames: &[FrameResult], truth_deg: Option<f64>) -> Summary {
         .filter(|(_, count)| *count > 0)
         .collect();
 
+    let low_confidence_frames = ok
+        .iter()
+        .filter(|f| f.details.confidence.is_some_and(|c| c < LOW_CONFIDENCE))
+        .count();
+
     Summary {
         frames: frames.len(),
         ok_frames: ok.len(),
+        low_confidence_frames,
         median_slope_deg: median(&mut slopes),
         median_abs_slope_deg,
         abs_error_deg: median_abs_slope_deg
@@ -357,6 +463,7 @@ pub fn frame_result(index: u64, truth_deg: Option<f64>, estimate: &Estimate) -> 
         ms: Some(Timings(estimate.timings.clone())),
         error: (estimate.status == EstimateStatus::BadFrame)
             .then(|| "the estimator rejected the cloud (size mismatch or empty)".to_string()),
+        details: FrameDetails::of(estimate),
     }
 }
 
@@ -419,7 +526,6 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<EvalOutcome> {
     };
     let total: usize = opened.iter().map(|(_, r)| frame_limit(r)).sum();
     let bar = progress_bar(args.quiet, total * configs.len());
-    let mut estimators: Vec<Estimator> = configs.into_iter().map(Estimator::new).collect();
     let label_width = args
         .recordings
         .iter()
@@ -441,6 +547,8 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<EvalOutcome> {
             (Some(_), Some(index)) => Some(index),
             (Some(_), None) => frames.get(frames.len() / 2).map(|f| f.index),
         };
+        // Fresh estimators: the tracked slope follows this recording only.
+        let mut estimators: Vec<Estimator> = configs.iter().cloned().map(Estimator::new).collect();
         let (reports, kept) = evaluate_recording(
             recording,
             &label,
@@ -498,7 +606,7 @@ fn print_line(bar: &ProgressBar, text: &str) -> anyhow::Result<bool> {
     }
 }
 
-/// Runs every estimator on every frame of one recording.
+/// Runs every estimator on every frame of one recording, in order.
 fn evaluate_recording(
     recording: &Recording,
     label: &str,
@@ -533,6 +641,7 @@ fn evaluate_recording(
                         truth_deg,
                         ms: None,
                         error: Some(error.clone()),
+                        details: FrameDetails::default(),
                     });
                 }
                 bar.inc(estimators.len() as u64);
@@ -546,9 +655,13 @@ fn evaluate_recording(
                     intrinsics: recording.intrinsics(),
                     mount: recording.mount(),
                 };
+                let info = FrameInfo {
+                    index: frame.index,
+                    stamp_ns: frame.timestamp_ns,
+                };
                 let mut kept = Vec::new();
                 for (estimator, per_method) in estimators.iter_mut().zip(&mut results) {
-                    let estimate = estimator.estimate(&view);
+                    let estimate = estimator.estimate_frame(&view, info);
                     tracing::debug!(
                         recording = label,
                         frame = frame.index,
@@ -716,6 +829,12 @@ pub fn table_rows(report: &MethodReport, label_width: usize) -> String {
             .collect();
         text.push_str(&format!("\n    stages (median ms): {}", stages.join(", ")));
     }
+    if s.low_confidence_frames > 0 {
+        text.push_str(&format!(
+            "\n    low confidence (< {LOW_CONFIDENCE}): {} of {} ok frames",
+            s.low_confidence_frames, s.ok_frames
+        ));
+    }
     if !s.not_ok.0.is_empty() {
         let counts: Vec<String> = s
             .not_ok
@@ -750,6 +869,10 @@ mod tests {
                 stages: vec![("outlier", total_ms / 2.0), ("ransac", total_ms / 4.0)],
             })),
             error: None,
+            details: FrameDetails {
+                confidence: Some(0.9),
+                ..FrameDetails::default()
+            },
         }
     }
 
@@ -768,6 +891,7 @@ mod tests {
                 })
             }),
             error: None,
+            details: FrameDetails::default(),
         }
     }
 
@@ -798,6 +922,82 @@ mod tests {
             vec![("outlier".to_string(), 2.5), ("ransac".to_string(), 1.5)]
         );
         assert_eq!(s.not_ok.0, vec![("no_inclined_plane", 1), ("bad_frame", 1)]);
+    }
+
+    #[test]
+    fn low_confidence_counts_ok_frames_below_the_threshold() {
+        let with_confidence = |index, confidence| {
+            let mut frame = ok_frame(index, 10.0, None, 1.0);
+            frame.details.confidence = confidence;
+            frame
+        };
+        let frames = vec![
+            with_confidence(0, Some(0.2)),
+            with_confidence(1, Some(0.5)),
+            with_confidence(2, Some(0.49)),
+            with_confidence(3, None),
+            // Not ok: counted under not_ok, not as low confidence.
+            failed_frame(4, EstimateStatus::NoGround, Some(1.0)),
+        ];
+        let report = MethodReport::new("r".into(), SlopeMethod::Paper, frames);
+        assert_eq!(report.summary.low_confidence_frames, 2);
+        let table = table_rows(&report, 9);
+        assert!(
+            table.contains("low confidence (< 0.5): 2 of 4 ok frames"),
+            "{table}"
+        );
+    }
+
+    #[test]
+    fn details_carry_the_planes_confidence_and_track() {
+        let estimate = Estimate {
+            confidence: 0.3,
+            confidence_reasons: slope_ipc_types::confidence::SMALL_AREA,
+            tracked: Some(TrackedSlope {
+                slope_deg: f64::NAN,
+                std_deg: f64::NAN,
+                frames: 0,
+                accepted: false,
+            }),
+            ..ramp_estimate()
+        };
+        let frame = frame_result(4, Some(16.0), &estimate);
+        let d = &frame.details;
+        let (ground, inclined) = (estimate.ground.unwrap(), estimate.inclined.unwrap());
+        assert_eq!(d.ground_plane, Some(ground.coefficients));
+        assert_eq!(d.inclined_plane, Some(inclined.coefficients));
+        assert_eq!(d.ground_inliers, Some(ground.inliers));
+        assert_eq!(d.inclined_rms_m, Some(inclined.rms_m));
+        assert_eq!(d.ground_area_m2, Some(ground.area_m2));
+        assert_eq!(d.confidence, Some(0.3));
+        assert_eq!(d.confidence_reasons, Some(vec!["small_area"]));
+        assert_eq!(d.ground_from_mount, Some(false));
+        let tracked = d.tracked.as_ref().unwrap();
+        assert_eq!((tracked.slope_deg, tracked.frames), (None, 0));
+        let json = serde_json::to_value(&frame).unwrap();
+        assert_eq!(
+            json["confidence_reasons"],
+            serde_json::json!(["small_area"])
+        );
+        assert_eq!(
+            json["tracked"],
+            serde_json::json!({"slope_deg": null, "std_deg": null, "frames": 0, "accepted": false})
+        );
+        // Flattened: the details sit beside the v1 keys.
+        assert!(json["ground_plane"].is_array() && json["details"].is_null());
+    }
+
+    /// An estimate of an analytic ramp.
+    fn ramp_estimate() -> Estimate {
+        use slope_pipeline::fixtures::{Scene, SceneCloud};
+        let mut estimator = Estimator::new(EstimatorConfig {
+            method: SlopeMethod::Tls,
+            ..EstimatorConfig::default()
+        });
+        let cloud = SceneCloud::kinect2(&Scene::ramp(16.0), 1);
+        let estimate = estimator.estimate(&cloud.view());
+        assert_eq!(estimate.status, EstimateStatus::Ok);
+        estimate
     }
 
     #[test]

@@ -211,6 +211,100 @@ fn path_str(path: &Path) -> &str {
     path.to_str().unwrap()
 }
 
+/// A plane `[a, b, c, d]`: a unit normal and the camera on its positive
+/// side (`d`, the camera's distance to the plane, > 0).
+fn check_plane(plane: &Value, estimate: &Value) -> [f64; 4] {
+    let c: Vec<f64> = plane
+        .as_array()
+        .unwrap_or_else(|| panic!("plane not an array: {estimate}"))
+        .iter()
+        .map(num)
+        .collect();
+    let c: [f64; 4] = c.try_into().unwrap_or_else(|_| panic!("{estimate}"));
+    let norm = dot([c[0], c[1], c[2]], [c[0], c[1], c[2]]).sqrt();
+    assert!((norm - 1.0).abs() < 1e-9, "|n| = {norm}: {estimate}");
+    assert!(c[3] > 0.0, "d <= 0: {estimate}");
+    c
+}
+
+/// The planes, confidence and track of an estimate: present and sane for
+/// a frame the estimator ran on, `null` for one it could not read.
+fn check_details(estimate: &Value) {
+    if estimate["ms"].is_null() {
+        for key in [
+            "ground_plane",
+            "inclined_plane",
+            "ground_inliers",
+            "ground_rms_m",
+            "inclined_area_m2",
+            "confidence",
+            "confidence_reasons",
+            "ground_from_mount",
+            "tracked",
+        ] {
+            assert!(estimate[key].is_null(), "{key}: {estimate}");
+        }
+        return;
+    }
+    let confidence = num(&estimate["confidence"]);
+    assert!((0.0..=1.0).contains(&confidence), "{estimate}");
+    let known: Vec<&str> = slope_ipc_types::confidence::ALL
+        .iter()
+        .map(|(_, name)| *name)
+        .collect();
+    for reason in estimate["confidence_reasons"].as_array().unwrap() {
+        let reason = reason.as_str().unwrap();
+        assert!(known.contains(&reason), "{reason}: {estimate}");
+    }
+    if estimate["status"] != "ok" {
+        assert_eq!(confidence, 0.0, "{estimate}");
+    }
+    let from_mount = estimate["ground_from_mount"].as_bool().unwrap();
+    for (plane, present) in [
+        ("ground", !from_mount && estimate["status"] == "ok"),
+        ("inclined", estimate["status"] == "ok"),
+    ] {
+        let coefficients = &estimate[format!("{plane}_plane").as_str()];
+        if coefficients.is_null() {
+            assert!(!present, "no {plane} plane: {estimate}");
+            for key in ["inliers", "rms_m", "area_m2"] {
+                let key = format!("{plane}_{key}");
+                assert!(estimate[key.as_str()].is_null(), "{key}: {estimate}");
+            }
+            continue;
+        }
+        check_plane(coefficients, estimate);
+        let inliers = estimate[format!("{plane}_inliers").as_str()]
+            .as_u64()
+            .unwrap();
+        assert!(inliers > 0, "{estimate}");
+        let rms = num(&estimate[format!("{plane}_rms_m").as_str()]);
+        assert!((0.0..0.1).contains(&rms), "{plane} rms {rms}: {estimate}");
+        let area = num(&estimate[format!("{plane}_area_m2").as_str()]);
+        assert!(
+            area > 0.0 && area.is_finite(),
+            "{plane} area {area}: {estimate}"
+        );
+    }
+    let tracked = &estimate["tracked"];
+    if !tracked.is_null() {
+        assert_eq!(
+            keys(tracked),
+            set(&["slope_deg", "std_deg", "frames", "accepted"]),
+            "{estimate}"
+        );
+        assert!(tracked["accepted"].is_boolean(), "{estimate}");
+        // Frames accepted since the track (re)started: at most the frames
+        // of this recording so far.
+        let frames = tracked["frames"].as_u64().unwrap();
+        let index = estimate["index"].as_u64().unwrap();
+        assert!(frames <= index + 1, "{estimate}");
+        if !tracked["std_deg"].is_null() {
+            assert!(num(&tracked["std_deg"]) >= 0.0, "{estimate}");
+        }
+    }
+}
+
 /// Checks the keys of a report and that its summary follows from its
 /// estimates; returns the summary.
 fn check_report(report: &Value, truth: Option<f64>) -> &Value {
@@ -230,10 +324,23 @@ fn check_report(report: &Value, truth: Option<f64>) -> &Value {
                 "distance_m",
                 "truth_deg",
                 "ms",
-                "error"
+                "error",
+                "ground_plane",
+                "inclined_plane",
+                "ground_inliers",
+                "inclined_inliers",
+                "ground_rms_m",
+                "inclined_rms_m",
+                "ground_area_m2",
+                "inclined_area_m2",
+                "confidence",
+                "confidence_reasons",
+                "ground_from_mount",
+                "tracked"
             ]),
             "{estimate}"
         );
+        check_details(estimate);
     }
     let summary = &report["summary"];
     assert_eq!(
@@ -241,6 +348,7 @@ fn check_report(report: &Value, truth: Option<f64>) -> &Value {
         set(&[
             "frames",
             "ok_frames",
+            "low_confidence_frames",
             "median_slope_deg",
             "median_abs_slope_deg",
             "abs_error_deg",
@@ -253,6 +361,8 @@ fn check_report(report: &Value, truth: Option<f64>) -> &Value {
     let ok: Vec<&Value> = estimates.iter().filter(|e| e["status"] == "ok").collect();
     assert_eq!(summary["frames"], estimates.len());
     assert_eq!(summary["ok_frames"], ok.len());
+    let low_confidence = ok.iter().filter(|e| num(&e["confidence"]) < 0.5).count();
+    assert_eq!(summary["low_confidence_frames"], low_confidence);
     let slopes: Vec<f64> = ok.iter().map(|e| num(&e["slope_deg"])).collect();
     let median_slope = median(slopes.clone());
     let median_abs = median(slopes.iter().map(|s| s.abs()).collect());
@@ -563,4 +673,97 @@ fn bad_arguments_are_refused() {
     let out = eval(&["--help"]);
     assert!(out.success);
     assert!(out.stdout.contains("Examples:") && out.stdout.contains("|slope_deg|"));
+}
+
+/// The bundled noisy 16° ramp (30 frames, camera 0.5 m above the ground,
+/// pitched 20° down).
+fn bundled_ramp16() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/recordings/ramp16")
+}
+
+/// Angle between two unit normals, degrees.
+fn angle_deg(a: [f64; 4], b: [f64; 4]) -> f64 {
+    let cos = dot([a[0], a[1], a[2]], [b[0], b[1], b[2]]);
+    cos.clamp(-1.0, 1.0).acos().to_degrees()
+}
+
+#[test]
+fn the_bundled_ramp_reports_planes_quality_confidence_and_track() {
+    let rec = bundled_ramp16();
+    let out = eval(&[path_str(&rec), "--json", "--method", "all", "-q"]);
+    assert!(out.success, "{}", out.stderr);
+    let reports = json_lines(&out.stdout);
+    assert_eq!(reports.len(), 3);
+    // The recording's mount: pitch -20°, roll 0.
+    let p = (-20.0f64).to_radians();
+    let up = [0.0, -p.cos(), p.sin(), 0.0];
+    for report in &reports {
+        let summary = check_report(report, Some(16.0));
+        assert_eq!(summary["frames"], 30, "{summary}");
+        let ok: Vec<&Value> = report["estimates"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|e| e["status"] == "ok")
+            .collect();
+        assert!(ok.len() >= 27, "{summary}");
+        for estimate in ok {
+            // The ground plane: the mount's (0.5 m below the camera, normal
+            // the up vector of a 20° pitch), within the recording's jitter.
+            assert_eq!(estimate["ground_from_mount"], false, "{estimate}");
+            let ground = check_plane(&estimate["ground_plane"], estimate);
+            let inclined = check_plane(&estimate["inclined_plane"], estimate);
+            assert!((ground[3] - 0.5).abs() < 0.02, "{estimate}");
+            assert!(angle_deg(ground, up) < 1.5, "{estimate}");
+            // The planes meet at the ramp's 16°.
+            assert!(
+                (angle_deg(ground, inclined) - 16.0).abs() < 1.0,
+                "{estimate}"
+            );
+            // The ramp covers more of the image than the ground before it.
+            let inliers = |plane: &str| estimate[plane].as_u64().unwrap();
+            assert!(inliers("inclined_inliers") > 10_000, "{estimate}");
+            assert!(inliers("ground_inliers") > 10_000, "{estimate}");
+            assert!(num(&estimate["inclined_area_m2"]) > 1.0, "{estimate}");
+            // Millimetre depth with Kinect noise: RMS of a few millimetres.
+            assert!(num(&estimate["ground_rms_m"]) < 0.02, "{estimate}");
+            assert!(num(&estimate["inclined_rms_m"]) < 0.02, "{estimate}");
+        }
+    }
+}
+
+#[test]
+fn each_recording_gets_fresh_estimators() {
+    // The same recording twice: the second report must not continue the
+    // first one's track (nor anything else an estimator keeps).
+    let rec = bundled_ramp16();
+    let out = eval(&[
+        path_str(&rec),
+        path_str(&rec),
+        "--json",
+        "--method",
+        "least-squares",
+        "--max-frames",
+        "6",
+        "-q",
+    ]);
+    assert!(out.success, "{}", out.stderr);
+    let reports = json_lines(&out.stdout);
+    assert_eq!(reports.len(), 2);
+    let without_timings = |report: &Value| -> Vec<Value> {
+        report["estimates"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|e| {
+                let mut e = e.clone();
+                e.as_object_mut().unwrap().remove("ms");
+                e
+            })
+            .collect()
+    };
+    for report in &reports {
+        check_report(report, Some(16.0));
+    }
+    assert_eq!(without_timings(&reports[0]), without_timings(&reports[1]));
 }

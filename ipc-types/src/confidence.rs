@@ -1,0 +1,50 @@
+//! Why an estimate's confidence is low: bits of `SlopeEstimate`'s
+//! `confidence_reasons`, one per reason (several may be set).
+
+/// A chosen plane has few pixels (under 3000 for the inclined plane).
+pub const FEW_POINTS: u32 = 1 << 0;
+/// A chosen plane is rough: its inliers fill much of the RANSAC threshold
+/// band (relative RMS above 0.3).
+pub const ROUGH_PLANE: u32 = 1 << 1;
+/// The inclined plane covers little surface (under 0.05 square metres).
+pub const SMALL_AREA: u32 = 1 << 2;
+/// No ground plane was seen; the mount's plane stands in for it.
+pub const GROUND_FROM_MOUNT: u32 = 1 << 3;
+/// A chosen plane lies largely along the image border (partly out of view).
+pub const NEAR_BORDER: u32 = 1 << 4;
+/// The paper method and a TLS fit of the same planes disagree.
+pub const METHODS_DISAGREE: u32 = 1 << 5;
+
+/// Every reason with its name, in bit order.
+pub const ALL: [(u32, &str); 6] = [
+    (FEW_POINTS, "few_points"),
+    (ROUGH_PLANE, "rough_plane"),
+    (SMALL_AREA, "small_area"),
+    (GROUND_FROM_MOUNT, "ground_from_mount"),
+    (NEAR_BORDER, "near_border"),
+    (METHODS_DISAGREE, "methods_disagree"),
+];
+
+/// The names of the reasons set in `bits`, in bit order.
+pub fn names(bits: u32) -> impl Iterator<Item = &'static str> {
+    ALL.into_iter()
+        .filter(move |(bit, _)| bits & bit != 0)
+        .map(|(_, name)| name)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bits_are_distinct_and_named() {
+        let all = ALL.iter().fold(0, |acc, (bit, _)| {
+            assert_eq!(acc & bit, 0);
+            acc | bit
+        });
+        assert_eq!(all, 0b11_1111);
+        let names: Vec<_> = names(FEW_POINTS | GROUND_FROM_MOUNT).collect();
+        assert_eq!(names, ["few_points", "ground_from_mount"]);
+        assert_eq!(super::names(0).count(), 0);
+    }
+}

@@ -1,0 +1,175 @@
+//! How far to trust an estimate: a confidence in [0, 1] and the reasons it
+//! is below 1 (bits of `slope_ipc_types::confidence`).
+//!
+//! The confidence is the product of one factor per reason, each 1 when the
+//! reason does not apply:
+//!
+//! | reason | applies when | factor |
+//! |---|---|---|
+//! | `few_points` | a chosen plane has fewer than 3000 pixels | `max(n / 3000, 0.2)` |
+//! | `rough_plane` | a chosen plane's relative RMS is above 0.3 | down to 0.5 at 0.45 |
+//! | `small_area` | the inclined plane covers under 0.05 m^2 | `max(area / 0.05, 0.3)` |
+//! | `ground_from_mount` | no ground plane was seen | 0.7 |
+//! | `near_border` | over 30 % of a plane's pixels are within 8 px of the border | `1 - (share - 0.3)`, at least 0.5 |
+//! | `methods_disagree` | paper method and TLS differ by more than 1 degree | `max(1 / difference, 0.2)` |
+//!
+//! A planner may gate on the value (e.g. `>= 0.5`) and log the reasons.
+
+use slope_ipc_types::confidence as reason;
+
+use crate::selection::PlaneQuality;
+
+/// Fewer pixels than this on a chosen plane lower the confidence.
+pub const FEW_PIXELS: usize = 3000;
+/// Relative RMS above this lowers the confidence...
+pub const ROUGH_RELATIVE_RMS: f64 = 0.3;
+/// ...to half at this (the selection's default flatness limit).
+pub const ROUGH_HALF_AT: f64 = 0.45;
+/// An inclined plane smaller than this lowers the confidence, m^2.
+pub const SMALL_AREA_M2: f64 = 0.05;
+/// The factor for a ground taken from the mount.
+pub const GROUND_FROM_MOUNT_FACTOR: f64 = 0.7;
+/// A share of border pixels above this lowers the confidence.
+pub const BORDER_SHARE: f64 = 0.3;
+/// Paper method and TLS differing by more than this lower it, degrees.
+pub const DISAGREEMENT_DEG: f64 = 1.0;
+
+/// A chosen plane as the confidence sees it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ChosenPlane {
+    pub pixels: usize,
+    pub quality: PlaneQuality,
+}
+
+/// The confidence and its reasons.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Confidence {
+    pub value: f64,
+    pub reasons: u32,
+}
+
+impl Confidence {
+    fn full() -> Self {
+        Self {
+            value: 1.0,
+            reasons: 0,
+        }
+    }
+
+    fn lower(&mut self, bit: u32, factor: f64) {
+        if factor < 1.0 {
+            self.value *= factor.clamp(0.0, 1.0);
+            self.reasons |= bit;
+        }
+    }
+}
+
+/// The confidence of an estimate from its inclined plane, its ground
+/// (`None`: from the mount) and, when known, the difference between the
+/// paper method's and a TLS fit's angle, degrees.
+pub fn confidence(
+    inclined: &ChosenPlane,
+    ground: Option<&ChosenPlane>,
+    method_difference_deg: Option<f64>,
+) -> Confidence {
+    let mut c = Confidence::full();
+    for plane in std::iter::once(inclined).chain(ground) {
+        let few = (plane.pixels as f64 / FEW_PIXELS as f64).max(0.2);
+        c.lower(reason::FEW_POINTS, few);
+        let excess = (plane.quality.relative_rms - ROUGH_RELATIVE_RMS).max(0.0);
+        let rough = 1.0 - 0.5 * (excess / (ROUGH_HALF_AT - ROUGH_RELATIVE_RMS)).min(1.0);
+        c.lower(reason::ROUGH_PLANE, rough);
+        let border = 1.0 - (plane.quality.border_fraction - BORDER_SHARE).max(0.0);
+        c.lower(reason::NEAR_BORDER, border.max(0.5));
+    }
+    c.lower(
+        reason::SMALL_AREA,
+        (inclined.quality.area_m2 / SMALL_AREA_M2).max(0.3),
+    );
+    if ground.is_none() {
+        c.lower(reason::GROUND_FROM_MOUNT, GROUND_FROM_MOUNT_FACTOR);
+    }
+    if let Some(diff) = method_difference_deg.filter(|d| d.is_finite()) {
+        let diff = diff.abs();
+        if diff > DISAGREEMENT_DEG {
+            c.lower(reason::METHODS_DISAGREE, (1.0 / diff).max(0.2));
+        }
+    }
+    c
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn plane(pixels: usize, relative_rms: f64, area_m2: f64, border: f64) -> ChosenPlane {
+        ChosenPlane {
+            pixels,
+            quality: PlaneQuality {
+                rms_m: 0.003,
+                relative_rms,
+                area_m2,
+                border_fraction: border,
+            },
+        }
+    }
+
+    #[test]
+    fn a_good_pair_is_fully_trusted() {
+        let good = plane(20_000, 0.15, 1.0, 0.05);
+        let c = confidence(&good, Some(&good), Some(0.3));
+        assert_eq!(c, Confidence::full());
+    }
+
+    #[test]
+    fn each_reason_lowers_the_confidence_and_is_named() {
+        let good = plane(20_000, 0.15, 1.0, 0.05);
+        let cases = [
+            (
+                plane(1500, 0.15, 1.0, 0.0),
+                Some(good),
+                None,
+                reason::FEW_POINTS,
+                0.5,
+            ),
+            (
+                plane(20_000, 0.45, 1.0, 0.0),
+                Some(good),
+                None,
+                reason::ROUGH_PLANE,
+                0.5,
+            ),
+            (
+                plane(20_000, 0.15, 0.025, 0.0),
+                Some(good),
+                None,
+                reason::SMALL_AREA,
+                0.5,
+            ),
+            (good, None, None, reason::GROUND_FROM_MOUNT, 0.7),
+            (
+                plane(20_000, 0.15, 1.0, 0.6),
+                Some(good),
+                None,
+                reason::NEAR_BORDER,
+                0.7,
+            ),
+            (good, Some(good), Some(4.0), reason::METHODS_DISAGREE, 0.25),
+        ];
+        for (inclined, ground, diff, bit, value) in cases {
+            let c = confidence(&inclined, ground.as_ref(), diff);
+            assert_eq!(c.reasons, bit, "{bit}");
+            assert!((c.value - value).abs() < 1e-12, "{bit}: {}", c.value);
+        }
+        // Reasons combine: the product of the factors.
+        let c = confidence(&plane(1500, 0.15, 0.025, 0.0), None, Some(4.0));
+        assert_eq!(
+            c.reasons,
+            reason::FEW_POINTS
+                | reason::SMALL_AREA
+                | reason::GROUND_FROM_MOUNT
+                | reason::METHODS_DISAGREE
+        );
+        assert!((c.value - 0.5 * 0.5 * 0.7 * 0.25).abs() < 1e-12);
+    }
+}

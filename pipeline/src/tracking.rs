@@ -1,0 +1,313 @@
+//! Tracking: one stable slope for the plane ahead, followed from frame to
+//! frame.
+//!
+//! A robot wants one number for the ramp ahead, not 30 raw ones a second.
+//! The tracker keeps the last `window` accepted per-frame slopes of the
+//! plane it follows and reports their median:
+//!
+//! - **Which frames count.** An `ok` estimate with at least
+//!   `min_confidence`. Others leave the track as it is; after `max_missed`
+//!   such frames in a row (1 s at 30 Hz) the track ends (the plane is out of
+//!   view).
+//! - **Same plane.** A frame belongs to the tracked plane when its signed
+//!   slope is within the gate of the track's median: `max(gate_deg,
+//!   gate_sigmas * sigma)`, sigma the robust spread (1.4826 MAD) of the
+//!   window. The slope of a plane does not change as the robot drives
+//!   towards it, so distance is not gated (it shrinks as the robot
+//!   approaches).
+//! - **Outliers are rejected, not averaged in.** A frame outside the gate is
+//!   not added to the window.
+//! - **Reset when the plane ahead changes.** When `reset_after` rejected
+//!   frames in a row agree with each other (all within the gate of their own
+//!   median), the track restarts from them: a new ramp, a wall after a
+//!   ramp.
+//! - **Its own standard deviation.** `1.2533 sigma / sqrt(n)` (the standard
+//!   error of a median of n), sigma the larger of the window's robust spread
+//!   and the median of the frames' own errors (`slope_std_deg / sqrt(samples)`),
+//!   so a window of identical values does not claim zero error.
+
+use std::collections::VecDeque;
+
+use serde::{Deserialize, Serialize};
+use slope_ipc_types::EstimateStatus;
+
+/// The tracked slope after a frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TrackedSlope {
+    /// Signed slope of the tracked plane, degrees (NaN when there is no
+    /// track).
+    pub slope_deg: f64,
+    /// Standard deviation of `slope_deg`, degrees (NaN when there is no
+    /// track).
+    pub std_deg: f64,
+    /// Frames accepted into the track since it (re)started (0: no track).
+    pub frames: u32,
+    /// True when this frame's estimate was accepted into the track.
+    pub accepted: bool,
+}
+
+/// Tracking parameters (`[tracking]`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct TrackingConfig {
+    /// Accepted frames whose median is the tracked slope.
+    pub window: usize,
+    /// Frames with less confidence are not used.
+    pub min_confidence: f64,
+    /// The smallest gate around the track's median, degrees.
+    pub gate_deg: f64,
+    /// The gate in robust spreads of the window.
+    pub gate_sigmas: f64,
+    /// Rejected frames in a row that agree with each other restart the
+    /// track.
+    pub reset_after: usize,
+    /// Frames in a row without a usable estimate end the track.
+    pub max_missed: usize,
+}
+
+impl Default for TrackingConfig {
+    fn default() -> Self {
+        Self {
+            window: 15,
+            min_confidence: 0.3,
+            gate_deg: 2.0,
+            gate_sigmas: 4.0,
+            reset_after: 5,
+            max_missed: 30,
+        }
+    }
+}
+
+/// One frame's estimate as the tracker sees it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FrameSlope {
+    pub status: EstimateStatus,
+    pub slope_deg: f64,
+    /// The frame's own error of `slope_deg`, degrees.
+    pub error_deg: f64,
+    pub confidence: f64,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Sample {
+    slope_deg: f64,
+    error_deg: f64,
+}
+
+/// Follows the inclined plane's slope over frames.
+#[derive(Debug, Clone, Default)]
+pub struct SlopeTracker {
+    window: VecDeque<Sample>,
+    rejected: Vec<Sample>,
+    frames: u32,
+    missed: usize,
+    scratch: Vec<f64>,
+}
+
+impl SlopeTracker {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Feeds one frame; returns the track after it.
+    pub fn update(&mut self, frame: &FrameSlope, config: &TrackingConfig) -> TrackedSlope {
+        let usable = frame.status == EstimateStatus::Ok
+            && frame.slope_deg.is_finite()
+            && frame.confidence >= config.min_confidence;
+        if !usable {
+            self.missed += 1;
+            if self.missed >= config.max_missed.max(1) {
+                self.clear();
+            }
+            return self.tracked(false);
+        }
+        self.missed = 0;
+        let sample = Sample {
+            slope_deg: frame.slope_deg,
+            error_deg: if frame.error_deg.is_finite() {
+                frame.error_deg
+            } else {
+                0.0
+            },
+        };
+        let accepted = match self.median_and_sigma() {
+            None => true,
+            Some((median, sigma)) => {
+                (sample.slope_deg - median).abs() <= config.gate_deg.max(config.gate_sigmas * sigma)
+            }
+        };
+        if accepted {
+            self.rejected.clear();
+            self.push(sample, config);
+        } else {
+            self.rejected.push(sample);
+            if self.rejected.len() >= config.reset_after.max(1) && self.rejected_agree(config) {
+                let restart = std::mem::take(&mut self.rejected);
+                self.clear();
+                for s in restart {
+                    self.push(s, config);
+                }
+                return self.tracked(true);
+            }
+        }
+        self.tracked(accepted)
+    }
+
+    fn push(&mut self, sample: Sample, config: &TrackingConfig) {
+        self.window.push_back(sample);
+        while self.window.len() > config.window.max(1) {
+            self.window.pop_front();
+        }
+        self.frames = self.frames.saturating_add(1);
+    }
+
+    fn clear(&mut self) {
+        self.window.clear();
+        self.rejected.clear();
+        self.frames = 0;
+    }
+
+    /// True when the rejected frames all lie within the gate of their median.
+    fn rejected_agree(&mut self, config: &TrackingConfig) -> bool {
+        self.scratch.clear();
+        self.scratch
+            .extend(self.rejected.iter().map(|s| s.slope_deg));
+        let median = median(&mut self.scratch);
+        self.rejected
+            .iter()
+            .all(|s| (s.slope_deg - median).abs() <= config.gate_deg)
+    }
+
+    /// The window's median and robust spread (the larger of 1.4826 MAD and
+    /// the median of the frames' own errors).
+    fn median_and_sigma(&mut self) -> Option<(f64, f64)> {
+        if self.window.is_empty() {
+            return None;
+        }
+        self.scratch.clear();
+        self.scratch.extend(self.window.iter().map(|s| s.slope_deg));
+        let m = median(&mut self.scratch);
+        self.scratch.clear();
+        self.scratch
+            .extend(self.window.iter().map(|s| (s.slope_deg - m).abs()));
+        let mad = 1.4826 * median(&mut self.scratch);
+        self.scratch.clear();
+        self.scratch.extend(self.window.iter().map(|s| s.error_deg));
+        let own = median(&mut self.scratch);
+        Some((m, mad.max(own)))
+    }
+
+    fn tracked(&mut self, accepted: bool) -> TrackedSlope {
+        match self.median_and_sigma() {
+            Some((slope, sigma)) => TrackedSlope {
+                slope_deg: slope,
+                std_deg: 1.2533 * sigma / (self.window.len() as f64).sqrt(),
+                frames: self.frames,
+                accepted,
+            },
+            None => TrackedSlope {
+                slope_deg: f64::NAN,
+                std_deg: f64::NAN,
+                frames: 0,
+                accepted: false,
+            },
+        }
+    }
+}
+
+/// The median of `values` (reordered); NaN when empty.
+fn median(values: &mut [f64]) -> f64 {
+    let n = values.len();
+    if n == 0 {
+        return f64::NAN;
+    }
+    values.sort_unstable_by(f64::total_cmp);
+    if n % 2 == 1 {
+        values[n / 2]
+    } else {
+        0.5 * (values[n / 2 - 1] + values[n / 2])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ok(slope_deg: f64) -> FrameSlope {
+        FrameSlope {
+            status: EstimateStatus::Ok,
+            slope_deg,
+            error_deg: 0.05,
+            confidence: 1.0,
+        }
+    }
+
+    #[test]
+    fn outliers_are_rejected_and_a_new_plane_restarts_the_track() {
+        let config = TrackingConfig::default();
+        let mut t = SlopeTracker::new();
+        let raw = [16.1, 15.9, 16.0, 31.0, 16.05, 3.0, 15.95, 16.0, 60.0, 16.02];
+        for (k, &s) in raw.iter().enumerate() {
+            let tr = t.update(&ok(s), &config);
+            assert!(
+                (tr.slope_deg - 16.0).abs() <= 0.1 + 1e-9,
+                "frame {k}: {tr:?}"
+            );
+            assert_eq!(tr.accepted, (s - 16.0f64).abs() < 1.0, "frame {k}");
+        }
+        // A wall after the ramp: four rejected frames, the fifth restarts.
+        for k in 0..config.reset_after {
+            let tr = t.update(&ok(90.0 + 0.1 * k as f64), &config);
+            if k + 1 < config.reset_after {
+                assert!((tr.slope_deg - 16.0).abs() <= 0.1 + 1e-9, "{tr:?}");
+            } else {
+                assert!((tr.slope_deg - 90.2).abs() <= 0.11, "{tr:?}");
+                assert_eq!(tr.frames, config.reset_after as u32);
+            }
+        }
+    }
+
+    #[test]
+    fn unusable_frames_hold_the_track_until_it_is_lost() {
+        let config = TrackingConfig::default();
+        let mut t = SlopeTracker::new();
+        t.update(&ok(10.0), &config);
+        let none = FrameSlope {
+            status: EstimateStatus::NoInclinedPlane,
+            slope_deg: f64::NAN,
+            error_deg: f64::NAN,
+            confidence: 0.0,
+        };
+        let low = FrameSlope {
+            confidence: 0.1,
+            ..ok(40.0)
+        };
+        for _ in 0..config.max_missed - 1 {
+            for f in [&none, &low] {
+                let tr = t.update(f, &config);
+                assert!(!tr.accepted);
+                assert_eq!(tr.slope_deg, 10.0);
+            }
+            // The usable frame in between keeps the track alive.
+            t.update(&ok(10.0), &config);
+        }
+        for _ in 0..config.max_missed {
+            t.update(&none, &config);
+        }
+        let tr = t.update(&none, &config);
+        assert!(tr.slope_deg.is_nan() && tr.frames == 0, "{tr:?}");
+    }
+
+    #[test]
+    fn the_spread_shrinks_with_frames_but_not_to_zero() {
+        let config = TrackingConfig::default();
+        let mut t = SlopeTracker::new();
+        let first = t.update(&ok(5.0), &config);
+        let mut last = first;
+        for _ in 0..20 {
+            last = t.update(&ok(5.0), &config);
+        }
+        assert!((first.std_deg - 1.2533 * 0.05).abs() < 1e-12);
+        assert!((last.std_deg - 1.2533 * 0.05 / 15f64.sqrt()).abs() < 1e-12);
+    }
+}
