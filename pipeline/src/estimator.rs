@@ -78,7 +78,9 @@ pub struct Estimate {
     pub method: SlopeMethod,
     /// Signed slope, degrees: + uphill, - downhill; NaN unless `Ok`.
     pub slope_deg: f64,
-    /// Spread of the averaged angle samples (0 for a single fit), degrees.
+    /// Spread of the averaged angle samples, degrees; NaN for the
+    /// baselines (one fit, no spread: a planner gating on the spread must
+    /// not trust them blindly; use the confidence).
     pub slope_std_deg: f64,
     /// Angle samples averaged (1 for the baselines).
     pub samples: u32,
@@ -468,7 +470,8 @@ fn baseline_fit(
         inclined: incl_plane,
         ground: ground_plane,
         angle_deg: incl_plane.map_or(f64::NAN, |p| angle_between_deg(&p.normal, &up)),
-        std_deg: 0.0,
+        // One fit is one sample: it has no spread (not a spread of 0).
+        std_deg: f64::NAN,
         samples: 1,
     }
 }

@@ -50,6 +50,13 @@ fn every_method_measures_the_paper_slopes_within_0_3_deg() {
             );
             assert!(!e.ground_from_mount);
             assert!(e.ground.is_some() && e.inclined.is_some());
+            // The paper method's spread is that of its angle samples; a
+            // baseline's single fit has none (never a spread of 0).
+            if method == SlopeMethod::Paper {
+                assert!(e.slope_std_deg > 0.0 && e.samples == 1000, "{e:?}");
+            } else {
+                assert!(e.slope_std_deg.is_nan() && e.samples == 1, "{e:?}");
+            }
         }
     }
 }

@@ -10,7 +10,7 @@
 use core::time::Duration;
 use std::fmt::Debug;
 
-use iceoryx2::port::listener::Listener;
+use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
@@ -170,11 +170,15 @@ impl TopicListener {
             .map_err(|e| IpcError::new("read notifications", &self.service, e))
     }
 
-    /// Blocks until a notification arrives or `timeout` passes.
+    /// Blocks until a notification arrives or `timeout` passes. A signal
+    /// (SIGINT, SIGTERM) that interrupts the wait ends it early with no
+    /// notification, not an error: the caller's stop flag decides what the
+    /// signal means.
     pub fn wait(&self, timeout: Duration) -> Result<u64, IpcError> {
-        self.listener
-            .timed_wait(|_| {}, timeout)
-            .map_err(|e| IpcError::new("wait for notifications", &self.service, e))
+        match self.listener.timed_wait(|_| {}, timeout) {
+            Err(ListenerWaitError::InterruptSignal) => Ok(0),
+            result => result.map_err(|e| IpcError::new("wait for notifications", &self.service, e)),
+        }
     }
 }
 

@@ -183,8 +183,9 @@ fn line_for(estimate: &SlopeEstimate, truth: Option<f64>) -> String {
             String::new()
         };
         format!(
-            "{head}  slope {:+7.2}° ± {:4.2}°{tracked}  {truth_text}{error}  {latency}",
-            estimate.slope_deg, estimate.slope_std_deg
+            "{head}  slope {:+7.2}° ± {}{tracked}  {truth_text}{error}  {latency}",
+            estimate.slope_deg,
+            crate::echo::spread_text(estimate.slope_std_deg)
         )
     } else {
         format!(

@@ -144,14 +144,24 @@ pub fn format_line(e: &SlopeEstimate) -> String {
             "  -   ".to_string()
         };
         format!(
-            "{head}  slope {:+7.2}° ± {:5.2}°  ahead {distance}  {}  {}  {tail}",
+            "{head}  slope {:+7.2}° ± {}  ahead {distance}  {}  {}  {tail}",
             e.slope_deg,
-            e.slope_std_deg,
+            spread_text(e.slope_std_deg),
             tracked_text(e),
             confidence_text(e)
         )
     } else {
         format!("{head}  {:<30} {tail}", status.name())
+    }
+}
+
+/// The spread as `" 0.20°"`, or `"   - "` when there is none (the
+/// baselines' single fit).
+pub fn spread_text(std_deg: f64) -> String {
+    if std_deg.is_finite() {
+        format!("{std_deg:5.2}°")
+    } else {
+        "   - ".to_string()
     }
 }
 

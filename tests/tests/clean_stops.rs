@@ -1,0 +1,79 @@
+//! Programs stopped with SIGINT or SIGTERM end with status 0, whether they
+//! were waiting for data or streaming it (a signal that interrupts an
+//! iceoryx2 wait is a stop request, not an error).
+
+use std::time::{Duration, Instant};
+
+use nix::sys::signal::Signal;
+use slope_integration_tests::{deadline, recording, unique_prefix, Proc};
+
+fn assert_exits_zero_within(proc: &mut Proc, within: Duration) {
+    let status = proc.wait_exit(Instant::now() + within);
+    let diagnostics = proc.diagnostics();
+    let status = status.unwrap_or_else(|| panic!("no exit within {within:?}\n{diagnostics}"));
+    assert!(status.success(), "exited with {status}\n{diagnostics}");
+}
+
+/// slope-record waiting for clouds that never come.
+#[test]
+fn a_waiting_recorder_stops_cleanly() {
+    for signal in [Signal::SIGINT, Signal::SIGTERM] {
+        let prefix = unique_prefix(&format!("record-wait-{signal}"));
+        let out = tempfile::tempdir().expect("temp dir");
+        let out_dir = out.path().join("scene");
+        let mut record = Proc::spawn(
+            "slope-record",
+            [
+                out_dir.to_str().expect("utf-8 path"),
+                "--service-prefix",
+                &prefix,
+            ],
+        );
+        assert!(
+            record
+                .wait_stderr("recording the cloud topic", deadline(20.0))
+                .is_some(),
+            "{}",
+            record.diagnostics()
+        );
+        record.signal(signal);
+        assert_exits_zero_within(&mut record, Duration::from_secs(2));
+    }
+}
+
+/// slope-demo while estimates stream: it ends with status 0 and its summary.
+#[test]
+fn a_streaming_demo_stops_cleanly_with_its_summary() {
+    let dir = recording("ramp16-clean");
+    let prefix = unique_prefix("demo-stream");
+    let mut demo = Proc::spawn(
+        "slope-demo",
+        [
+            "--recording",
+            dir.to_str().expect("utf-8 path"),
+            "--rate",
+            "2",
+            "--service-prefix",
+            &prefix,
+        ],
+    );
+    let first = demo.stdout_line(deadline(30.0));
+    let mut frame = first.clone();
+    while let Some(line) = &frame {
+        if line.starts_with("frame") {
+            break;
+        }
+        frame = demo.stdout_line(deadline(30.0));
+    }
+    assert!(frame.is_some(), "no estimate line\n{}", demo.diagnostics());
+    demo.signal(Signal::SIGINT);
+    assert_exits_zero_within(&mut demo, Duration::from_secs(3));
+    let mut rest = Vec::new();
+    while let Some(line) = demo.stdout_line(deadline(1.0)) {
+        rest.push(line);
+    }
+    assert!(
+        rest.iter().any(|l| l.starts_with("summary:")),
+        "no summary after the stop: {rest:?}"
+    );
+}
