@@ -49,8 +49,8 @@ pub struct ReplayArgs {
     pub max_frames: Option<u64>,
 
     /// Start only when this many subscribers are connected to the cloud
-    /// topic, so that nothing is lost.
-    #[arg(long, default_value_t = 0)]
+    /// topic, so that nothing is lost (0-6: the topic takes at most 6).
+    #[arg(long, default_value_t = 0, value_parser = wait_subscribers_arg)]
     pub wait_subscribers: usize,
 
     /// Give up (non-zero exit) if the subscribers are not there after this
@@ -141,4 +141,18 @@ pub fn run(args: &ReplayArgs, stop: &StopFlag) -> anyhow::Result<PublishStats> {
         "replay finished"
     );
     Ok(stats)
+}
+
+/// `--wait-subscribers`: at most the cloud topic's subscriber limit.
+fn wait_subscribers_arg(text: &str) -> Result<usize, String> {
+    let n: usize = text
+        .parse()
+        .map_err(|_| format!("`{text}` is not a whole number"))?;
+    let max = slope_sensor::ipc::CLOUD_MAX_SUBSCRIBERS;
+    if n > max {
+        return Err(format!(
+            "{n} subscribers can never connect: the cloud topic takes at most {max}"
+        ));
+    }
+    Ok(n)
 }

@@ -56,6 +56,10 @@ fn bad_values_are_refused() {
     let (ok, _, stderr) = run(replay, &["somewhere", "--speed", "0"]);
     assert!(!ok);
     assert!(stderr.contains("positive"), "{stderr}");
+    // More subscribers than the cloud topic takes could never connect.
+    let (ok, _, stderr) = run(replay, &["somewhere", "--wait-subscribers", "7"]);
+    assert!(!ok);
+    assert!(stderr.contains("at most 6"), "{stderr}");
     let estimator = env!("CARGO_BIN_EXE_slope-estimator");
     let (ok, _, stderr) = run(estimator, &["--method", "magic"]);
     assert!(!ok);
