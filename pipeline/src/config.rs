@@ -45,7 +45,7 @@ pub fn parse_method(name: &str) -> Option<SlopeMethod> {
 /// Why a configuration was rejected.
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {
-    #[error("estimator config is not valid TOML or has an unknown key: {0}")]
+    #[error("estimator config is not valid TOML or has an unknown key")]
     Parse(#[from] toml::de::Error),
     #[error("estimator config key `{key}` = {value}: {reason}")]
     Invalid {
@@ -614,14 +614,22 @@ patch_per_rms = -1
 
     #[test]
     fn unknown_keys_and_methods_are_errors() {
+        let report = |text: &str| {
+            let e = EstimatorConfig::from_toml_str(text).unwrap_err();
+            slope_sensor::error_chain::ErrorChain(&e).to_string()
+        };
+        for (text, named) in [
+            ("[ransac]\ndistance = 0.01\n", "distance"),
+            ("method = \"magic\"\n", "magic"),
+            ("[cumulative]\ndraws = 0\n", "cumulative.draws"),
+            ("[ransac]\nconfidence = 1.0\n", "ransac.confidence"),
+        ] {
+            let e = report(text);
+            assert!(e.contains(named), "{e}");
+        }
+        // The TOML detail is the cause, not repeated in the message.
         let e = EstimatorConfig::from_toml_str("[ransac]\ndistance = 0.01\n").unwrap_err();
-        assert!(e.to_string().contains("distance"), "{e}");
-        let e = EstimatorConfig::from_toml_str("method = \"magic\"\n").unwrap_err();
-        assert!(e.to_string().contains("magic"), "{e}");
-        let e = EstimatorConfig::from_toml_str("[cumulative]\ndraws = 0\n").unwrap_err();
-        assert!(e.to_string().contains("cumulative.draws"), "{e}");
-        let e = EstimatorConfig::from_toml_str("[ransac]\nconfidence = 1.0\n").unwrap_err();
-        assert!(e.to_string().contains("ransac.confidence"), "{e}");
+        assert!(!e.to_string().contains("distance"), "{e}");
     }
 
     #[test]

@@ -137,7 +137,7 @@ pub fn publish_stream(
             Ok(false) => break,
             Err(err @ SourceError::BadFrame { .. }) if options.skip_bad_frames => {
                 stats.skipped_bad += 1;
-                tracing::warn!(error = %err, "skipping bad frame");
+                tracing::warn!(error = %crate::error_chain::ErrorChain(&err), "skipping bad frame");
                 continue;
             }
             Err(err) => return Err(err.into()),

@@ -58,7 +58,7 @@ pub enum SourceError {
     #[error(transparent)]
     Recording(#[from] RecordingError),
     /// One frame is bad; the stream can go on without it.
-    #[error("bad frame {index} (row {row} of {file}): {source}")]
+    #[error("bad frame {index} (row {row} of {file})")]
     BadFrame {
         index: u64,
         row: usize,

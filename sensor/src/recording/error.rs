@@ -14,7 +14,7 @@ use super::FRAMES_FILE;
 #[derive(Debug, thiserror::Error)]
 pub enum RecordingError {
     /// A file or directory could not be opened or read.
-    #[error("cannot read {}: {source}", path.display())]
+    #[error("cannot read {}", path.display())]
     Read {
         path: PathBuf,
         #[source]
@@ -22,7 +22,7 @@ pub enum RecordingError {
     },
 
     /// A file or directory could not be created or written.
-    #[error("cannot write {}: {source}", path.display())]
+    #[error("cannot write {}", path.display())]
     Write {
         path: PathBuf,
         #[source]
@@ -30,7 +30,7 @@ pub enum RecordingError {
     },
 
     /// `recording.toml` is not valid TOML.
-    #[error("{} is not valid TOML: {source}", path.display())]
+    #[error("{} is not valid TOML", path.display())]
     Toml {
         path: PathBuf,
         #[source]
@@ -96,7 +96,7 @@ pub enum RecordingError {
     },
 
     /// The image a row names is missing or unreadable.
-    #[error("{FRAMES_FILE} line {row}: cannot read {}: {source}", image.display())]
+    #[error("{FRAMES_FILE} line {row}: cannot read {}", image.display())]
     ImageRead {
         row: usize,
         image: PathBuf,
@@ -105,7 +105,7 @@ pub enum RecordingError {
     },
 
     /// The image a row names is not a PNG that decodes.
-    #[error("{FRAMES_FILE} line {row}: cannot decode {}: {source}", image.display())]
+    #[error("{FRAMES_FILE} line {row}: cannot decode {}", image.display())]
     ImageDecode {
         row: usize,
         image: PathBuf,
@@ -152,7 +152,7 @@ pub enum RecordingError {
     },
 
     /// PNG encoding failed.
-    #[error("cannot encode {}: {source}", image.display())]
+    #[error("cannot encode {}", image.display())]
     ImageEncode {
         image: PathBuf,
         #[source]

@@ -74,6 +74,29 @@ pub fn prefix_arg(text: &str) -> Result<String, String> {
 }
 
 /// Installs the SIGINT/SIGTERM handler and returns the flag it sets.
+/// The exit status of a program's `run`, with its error (if any) printed
+/// once on stderr: the error, then one line per cause. Never a backtrace,
+/// whatever `RUST_BACKTRACE` says: a failed command is a user's problem to
+/// read, not a bug (panics keep their backtraces).
+pub fn exit_status(result: anyhow::Result<()>) -> std::process::ExitCode {
+    match result {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(err) => {
+            eprintln!("{}", error_report(&err));
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+/// `error: ...` and a `caused by: ...` line per cause.
+pub fn error_report(err: &anyhow::Error) -> String {
+    let mut text = format!("error: {err}");
+    for cause in err.chain().skip(1) {
+        text.push_str(&format!("\n  caused by: {cause}"));
+    }
+    text
+}
+
 pub fn stop_on_signals() -> anyhow::Result<StopFlag> {
     let stop = StopFlag::new();
     let handler_flag = stop.clone();

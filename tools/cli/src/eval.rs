@@ -511,8 +511,12 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<EvalOutcome> {
         match Recording::open(path) {
             Ok(recording) => opened.push((path, recording)),
             Err(err) => {
-                let message = format!("cannot evaluate {}: {err}", path.display());
-                tracing::error!("{message}");
+                let message = format!(
+                    "cannot evaluate {}: {}",
+                    path.display(),
+                    slope_sensor::error_chain::ErrorChain(&err)
+                );
+                // Reported once, with the others, when the run ends.
                 outcome.failures.push(message);
             }
         }
@@ -581,9 +585,7 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<EvalOutcome> {
             };
             // Suspended: `render` logs each file it writes.
             if let Err(err) = bar.suspend(|| render(&target, kept, recording, &label)) {
-                let message = format!("{err:#}");
-                bar.suspend(|| tracing::error!("{message}"));
-                outcome.failures.push(message);
+                outcome.failures.push(format!("{err:#}"));
             }
         }
         outcome.reports.extend(reports);

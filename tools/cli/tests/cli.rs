@@ -74,3 +74,34 @@ fn bad_values_are_refused() {
     assert!(!ok);
     assert!(stderr.contains("service prefix is empty"), "{stderr}");
 }
+
+/// A user's error is printed once, a line per cause, and never with a
+/// backtrace, whatever RUST_BACKTRACE says.
+#[test]
+fn user_errors_are_printed_once_without_a_backtrace() {
+    let replay = env!("CARGO_BIN_EXE_slope-replay");
+    let eval = env!("CARGO_BIN_EXE_slope-eval");
+    let readme = concat!(env!("CARGO_MANIFEST_DIR"), "/README.md");
+    for (bin, args, named) in [
+        (replay, vec!["/nonexistent/recording"], "recording.toml"),
+        (eval, vec![readme], "cannot evaluate"),
+    ] {
+        let output = Command::new(bin)
+            .args(&args)
+            .env("RUST_BACKTRACE", "1")
+            .output()
+            .expect("run");
+        assert!(!output.status.success());
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(stderr.matches("error:").count(), 1, "{stderr}");
+        assert_eq!(stderr.matches(named).count(), 1, "{stderr}");
+        assert!(!stderr.to_lowercase().contains("backtrace"), "{stderr}");
+        let lines: Vec<&str> = stderr.lines().collect();
+        for (k, line) in lines.iter().enumerate() {
+            assert!(
+                !lines[..k].contains(line),
+                "repeated line {line:?}: {stderr}"
+            );
+        }
+    }
+}

@@ -9,7 +9,7 @@ use slope_sensor::recording::RecordingError;
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
     /// The scene file could not be read.
-    #[error("cannot read scene file {}: {source}", path.display())]
+    #[error("cannot read scene file {}", path.display())]
     Read {
         path: PathBuf,
         #[source]
@@ -17,7 +17,7 @@ pub enum SceneError {
     },
 
     /// The scene file is not valid TOML or does not match the scene format.
-    #[error("{}: {source}", path.display())]
+    #[error("{} is not a valid scene file", path.display())]
     Toml {
         path: PathBuf,
         #[source]
@@ -70,7 +70,7 @@ pub enum WriteError {
     CameraInsideGeometry { frame: u64, y_m: f64 },
 
     /// The recording writer failed (directory not empty, disk full, ...).
-    #[error("writing recording {}: {source}", dir.display())]
+    #[error("writing recording {}", dir.display())]
     Recording {
         dir: PathBuf,
         #[source]

@@ -1,9 +1,11 @@
 //! `slope-synth`: parse the command line, set up logging, call [`slope_synth::run`].
 
+use std::process::ExitCode;
+
 use clap::Parser;
 use tracing_subscriber::EnvFilter;
 
-fn main() -> anyhow::Result<()> {
+fn main() -> ExitCode {
     let args = slope_synth::Args::parse();
     tracing_subscriber::fmt()
         .with_env_filter(
@@ -11,11 +13,18 @@ fn main() -> anyhow::Result<()> {
         )
         .with_writer(std::io::stderr)
         .init();
-    let summary = slope_synth::run(&args)?;
-    tracing::info!(
-        dir = %summary.dir.display(),
-        frames = summary.frames,
-        "done"
-    );
-    Ok(())
+    match slope_synth::run(&args) {
+        Ok(summary) => {
+            tracing::info!(dir = %summary.dir.display(), frames = summary.frames, "done");
+            ExitCode::SUCCESS
+        }
+        Err(err) => {
+            // Once, a line per cause, no backtrace (as the other programs).
+            eprintln!("error: {err}");
+            for cause in err.chain().skip(1) {
+                eprintln!("  caused by: {cause}");
+            }
+            ExitCode::FAILURE
+        }
+    }
 }

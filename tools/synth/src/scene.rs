@@ -426,6 +426,7 @@ pub fn load_scene_file(path: &Path) -> Result<SceneFile, SceneError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use slope_sensor::error_chain::ErrorChain;
 
     #[test]
     fn full_scene_file_parses() {
@@ -529,7 +530,7 @@ mod tests {
             ),
         ] {
             let err = parse_scene(text, Path::new("k.toml")).expect_err(text);
-            let message = err.to_string();
+            let message = ErrorChain(&err).to_string();
             assert!(
                 message.contains(key) && message.contains("k.toml") && message.contains("must"),
                 "{message}"
@@ -537,7 +538,8 @@ mod tests {
         }
         let err = parse_scene("[[tables]]\nheight_m = 1.0\n", Path::new("k.toml"))
             .expect_err("unknown key");
-        assert!(err.to_string().contains("height_m"), "{err}");
+        let message = ErrorChain(&err).to_string();
+        assert!(message.contains("height_m"), "{message}");
     }
 
     #[test]
@@ -552,7 +554,7 @@ mod tests {
     fn typo_is_an_error_naming_the_key() {
         let err =
             parse_scene("[ramp]\nslope_dg = 3.0\n", Path::new("s.toml")).expect_err("unknown key");
-        let text = err.to_string();
+        let text = ErrorChain(&err).to_string();
         assert!(
             text.contains("slope_dg") && text.contains("s.toml"),
             "{text}"

@@ -1,13 +1,13 @@
 //! `slope-capture`: the Kinect v2 daemon (needs the `kinect2` feature).
 
+use std::process::ExitCode;
+
 use clap::Parser;
 use slope_tools::capture::{run, CaptureArgs};
-use slope_tools::cli::stop_on_signals;
+use slope_tools::cli::{exit_status, stop_on_signals};
 
-fn main() -> anyhow::Result<()> {
+fn main() -> ExitCode {
     let args = CaptureArgs::parse();
     args.common.init_logging();
-    let stop = stop_on_signals()?;
-    run(&args, &stop)?;
-    Ok(())
+    exit_status(stop_on_signals().and_then(|stop| run(&args, &stop).map(drop)))
 }

@@ -1,12 +1,14 @@
 //! `slope-eval`: the estimator run offline on recordings, against their
 //! ground truth.
 
+use std::process::ExitCode;
+
 use clap::Parser;
+use slope_tools::cli::exit_status;
 use slope_tools::eval::{run, EvalArgs};
 
-fn main() -> anyhow::Result<()> {
+fn main() -> ExitCode {
     let args = EvalArgs::parse();
     args.init_logging();
-    let outcome = run(&args)?;
-    outcome.check()
+    exit_status(run(&args).and_then(|outcome| outcome.check()))
 }
