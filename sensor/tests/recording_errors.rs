@@ -97,16 +97,19 @@ fn missing_files_are_named() {
     );
     assert_names(&err, &["frames.csv"]);
 
+    // Without recording.toml it is no recording at all: the error says so
+    // and names the directory.
     fs::remove_file(dir.join("recording.toml")).unwrap();
     let err = open_err(&dir);
     assert!(
-        matches!(&err, RecordingError::Read { path, .. } if path.ends_with("recording.toml")),
+        matches!(&err, RecordingError::NotARecording { dir: d } if *d == dir),
         "{err}"
     );
-    assert_names(&err, &["recording.toml"]);
+    assert_names(&err, &["recording.toml", "not a recording directory"]);
 
-    let err = open_err(&tmp.path().join("no-such-recording"));
-    assert!(matches!(err, RecordingError::Read { .. }), "{err}");
+    let missing = tmp.path().join("no-such-recording");
+    let err = open_err(&missing);
+    assert!(matches!(err, RecordingError::NotARecording { .. }), "{err}");
 }
 
 #[test]

@@ -8,11 +8,19 @@
 use std::io;
 use std::path::PathBuf;
 
-use super::FRAMES_FILE;
+use super::{FRAMES_FILE, META_FILE};
 
 /// Why a recording could not be read or written.
 #[derive(Debug, thiserror::Error)]
 pub enum RecordingError {
+    /// The directory holds no `recording.toml` (or is no directory).
+    #[error(
+        "{} is not a recording directory (no {META_FILE}); a recording is a directory \
+         with {META_FILE}, {FRAMES_FILE} and depth/",
+        dir.display()
+    )]
+    NotARecording { dir: PathBuf },
+
     /// A file or directory could not be opened or read.
     #[error("cannot read {}", path.display())]
     Read {

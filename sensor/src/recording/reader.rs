@@ -43,6 +43,11 @@ impl Recording {
     /// and `frames.csv` (not the images).
     pub fn open(dir: &Path) -> Result<Recording, RecordingError> {
         let meta_path = dir.join(META_FILE);
+        if !meta_path.is_file() {
+            return Err(RecordingError::NotARecording {
+                dir: dir.to_path_buf(),
+            });
+        }
         let text = std::fs::read_to_string(&meta_path).map_err(|source| RecordingError::Read {
             path: meta_path.clone(),
             source,

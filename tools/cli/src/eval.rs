@@ -508,6 +508,12 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<EvalOutcome> {
     let mut outcome = EvalOutcome::default();
     let mut opened = Vec::new();
     for path in &args.recordings {
+        // A shell glob over a folder of recordings also names its files
+        // (README.md, make.sh): those are skipped, not failures.
+        if path.is_file() {
+            tracing::warn!(path = %path.display(), "skipping a file: a recording is a directory");
+            continue;
+        }
         match Recording::open(path) {
             Ok(recording) => opened.push((path, recording)),
             Err(err) => {

@@ -81,10 +81,14 @@ fn bad_values_are_refused() {
 fn user_errors_are_printed_once_without_a_backtrace() {
     let replay = env!("CARGO_BIN_EXE_slope-replay");
     let eval = env!("CARGO_BIN_EXE_slope-eval");
-    let readme = concat!(env!("CARGO_MANIFEST_DIR"), "/README.md");
+    let not_a_recording = env!("CARGO_MANIFEST_DIR");
     for (bin, args, named) in [
-        (replay, vec!["/nonexistent/recording"], "recording.toml"),
-        (eval, vec![readme], "cannot evaluate"),
+        (
+            replay,
+            vec!["/nonexistent/recording"],
+            "not a recording directory",
+        ),
+        (eval, vec![not_a_recording], "not a recording directory"),
     ] {
         let output = Command::new(bin)
             .args(&args)

@@ -518,6 +518,36 @@ fn a_recording_that_does_not_open_is_named_and_the_others_are_reported() {
     assert_eq!(reports[0]["summary"]["ok_frames"], 1);
 }
 
+/// `slope-eval DIR/*` (its own help's example) names the folder's files
+/// too: they are skipped; a directory without recording.toml is an error
+/// that says what a recording is.
+#[test]
+fn files_in_a_glob_are_skipped_and_other_directories_explained() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = write_recording(&dir.path().join("good"), &[10.0], Truth::Recording(10.0));
+    let readme = dir.path().join("README.md");
+    std::fs::write(&readme, "# recordings\n").unwrap();
+    let out = eval(&[
+        path_str(&readme),
+        path_str(&good),
+        "--json",
+        "--method",
+        "tls",
+    ]);
+    assert!(out.success, "{}", out.stderr);
+    assert!(out.stderr.contains("skipping a file"), "{}", out.stderr);
+    assert_eq!(json_lines(&out.stdout).len(), 1);
+    let empty = dir.path().join("empty");
+    std::fs::create_dir(&empty).unwrap();
+    let out = eval(&[path_str(&empty), "--method", "tls"]);
+    assert!(!out.success);
+    assert!(
+        out.stderr.contains("not a recording directory"),
+        "{}",
+        out.stderr
+    );
+}
+
 #[test]
 fn a_bad_frame_is_reported_and_the_others_evaluated() {
     let dir = tempfile::tempdir().unwrap();
