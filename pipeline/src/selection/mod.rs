@@ -55,8 +55,6 @@ pub struct PlaneSummary {
 pub struct Selection {
     pub ground: Ground,
     pub inclined: usize,
-    /// Reference up: the mount's up vector, or the camera's -y.
-    pub reference_up: Vector3<f64>,
     /// Ground normal used for the direction (unit, up): the lowest ground
     /// plane's, or the reference up for a ground from the mount.
     pub up: Vector3<f64>,
@@ -93,7 +91,6 @@ pub fn select_planes(
     Ok(Selection {
         ground,
         inclined,
-        reference_up: reference,
         up,
         forward,
     })
