@@ -74,6 +74,57 @@ pub fn prefix_arg(text: &str) -> Result<String, String> {
 }
 
 /// Installs the SIGINT/SIGTERM handler and returns the flag it sets.
+/// A note in the log when a topic stays silent: after `after` without data,
+/// once, naming the service (its prefix included) and what should publish
+/// on it; again after data came and went.
+#[derive(Debug)]
+pub struct SilenceNote {
+    what: &'static str,
+    service: String,
+    publisher: &'static str,
+    after: std::time::Duration,
+    last_heard: std::time::Instant,
+    noted: bool,
+}
+
+/// How long a topic may stay silent before its note.
+pub const SILENCE_NOTE_AFTER: std::time::Duration = std::time::Duration::from_secs(5);
+
+impl SilenceNote {
+    /// `what` arrives on `service` from `publisher` (a program's name).
+    pub fn new(what: &'static str, service: &str, publisher: &'static str) -> Self {
+        Self {
+            what,
+            service: service.to_string(),
+            publisher,
+            after: SILENCE_NOTE_AFTER,
+            last_heard: std::time::Instant::now(),
+            noted: false,
+        }
+    }
+
+    /// Data arrived.
+    pub fn heard(&mut self) {
+        self.last_heard = std::time::Instant::now();
+        self.noted = false;
+    }
+
+    /// Called on every wake: logs the note once the silence is long enough.
+    pub fn tick(&mut self) {
+        let silent = self.last_heard.elapsed();
+        if !self.noted && silent >= self.after {
+            self.noted = true;
+            tracing::info!(
+                "no {} for {} s on service {}: is {} running with the same service prefix?",
+                self.what,
+                silent.as_secs(),
+                self.service,
+                self.publisher
+            );
+        }
+    }
+}
+
 /// The exit status of a program's `run`, with its error (if any) printed
 /// once on stderr: the error, then one line per cause. Never a backtrace,
 /// whatever `RUST_BACKTRACE` says: a failed command is a user's problem to

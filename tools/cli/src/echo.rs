@@ -9,7 +9,7 @@ use slope_ipc_types::{EstimateStatus, SlopeEstimate};
 use slope_sensor::ipc::{create_node, EstimateSubscriber};
 use slope_sensor::publish::StopFlag;
 
-use crate::cli::{node_name, wait_loop, CommonArgs};
+use crate::cli::{node_name, wait_loop, CommonArgs, SilenceNote};
 use crate::replay::positive_f64;
 
 #[derive(Debug, Parser)]
@@ -203,11 +203,15 @@ pub fn run(args: &EchoArgs, stop: &StopFlag) -> anyhow::Result<u64> {
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     let count_reached = |received: u64| args.count.is_some_and(|c| received >= c);
+    let service = names.estimate().to_string();
+    let mut silence = SilenceNote::new("estimate", &service, "slope-estimator");
     let result = wait_loop(subscriber.listener(), stop, || {
+        silence.tick();
         while !count_reached(received) {
             let Some(estimate) = subscriber.receive()? else {
                 break;
             };
+            silence.heard();
             let line = if args.json {
                 serde_json::to_string(&EstimateJson::from(&estimate))?
             } else {

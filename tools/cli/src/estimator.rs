@@ -15,7 +15,7 @@ use slope_pipeline::{parse_method, CloudView, Estimator, EstimatorConfig, FrameI
 use slope_sensor::ipc::{create_node, CloudSubscriber, EstimatePublisher};
 use slope_sensor::publish::StopFlag;
 
-use crate::cli::{node_name, wait_loop, CommonArgs};
+use crate::cli::{node_name, wait_loop, CommonArgs, SilenceNote};
 
 #[derive(Debug, Parser)]
 #[command(
@@ -104,8 +104,18 @@ pub fn run(args: &EstimatorArgs, stop: &StopFlag) -> anyhow::Result<EstimatorSta
         last_index: None,
         max_frames: args.max_frames,
     };
+    let mut silence = SilenceNote::new(
+        "cloud",
+        subscriber.service_name(),
+        "slope-capture or slope-replay",
+    );
     wait_loop(subscriber.listener(), stop, || {
+        let processed = worker.stats.processed;
         worker.on_cloud_event()?;
+        if worker.stats.processed > processed {
+            silence.heard();
+        }
+        silence.tick();
         Ok(!worker.done())
     })?;
     tracing::info!(
