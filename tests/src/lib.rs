@@ -113,8 +113,18 @@ impl Proc {
         I: IntoIterator<Item = S>,
         S: AsRef<std::ffi::OsStr>,
     {
+        Self::spawn_with_env(name, args, &[])
+    }
+
+    /// Starts binary `name` with `args` and the environment variables `env`.
+    pub fn spawn_with_env<I, S>(name: &str, args: I, env: &[(&str, &str)]) -> Proc
+    where
+        I: IntoIterator<Item = S>,
+        S: AsRef<std::ffi::OsStr>,
+    {
         let mut command = Command::new(binary(name));
         command.args(args).env_remove("RUST_LOG");
+        command.envs(env.iter().copied());
         if let Some(filter) = std::env::var_os("SLOPE_TEST_LOG") {
             command.env("RUST_LOG", filter);
         }

@@ -7,6 +7,7 @@
 //! publisher's shared memory: the pipeline borrows the sample's slice.
 
 use std::path::PathBuf;
+use std::time::Instant;
 
 use anyhow::Context;
 use clap::Parser;
@@ -16,6 +17,7 @@ use slope_sensor::ipc::{create_node, CloudSubscriber, EstimatePublisher};
 use slope_sensor::publish::StopFlag;
 
 use crate::cli::{node_name, wait_loop, CommonArgs, SilenceNote};
+use crate::service_manager::ServiceManager;
 
 #[derive(Debug, Parser)]
 #[command(
@@ -102,6 +104,7 @@ pub fn run(args: &EstimatorArgs, stop: &StopFlag) -> anyhow::Result<EstimatorSta
         publisher: &publisher,
         stats: EstimatorStats::default(),
         last_index: None,
+        last_slope_deg: None,
         max_frames: args.max_frames,
     };
     let mut silence = SilenceNote::new(
@@ -109,15 +112,21 @@ pub fn run(args: &EstimatorArgs, stop: &StopFlag) -> anyhow::Result<EstimatorSta
         subscriber.service_name(),
         "slope-capture or slope-replay",
     );
-    wait_loop(subscriber.listener(), stop, || {
+    let mut manager = ServiceManager::from_env();
+    manager.ready("waiting for clouds");
+    let started = Instant::now();
+    let result = wait_loop(subscriber.listener(), stop, || {
         let processed = worker.stats.processed;
         worker.on_cloud_event()?;
         if worker.stats.processed > processed {
             silence.heard();
         }
         silence.tick();
+        manager.tick(|| worker.status_line(started.elapsed()));
         Ok(!worker.done())
-    })?;
+    });
+    manager.stopping();
+    result?;
     tracing::info!(
         processed = worker.stats.processed,
         dropped = worker.stats.dropped,
@@ -132,10 +141,28 @@ struct Worker<'a> {
     publisher: &'a EstimatePublisher,
     stats: EstimatorStats,
     last_index: Option<u64>,
+    /// The last `ok` slope, degrees.
+    last_slope_deg: Option<f64>,
     max_frames: Option<u64>,
 }
 
 impl Worker<'_> {
+    /// `30 frames in 1.0 s (30.0 fps), 0 dropped, last slope +16.01°`.
+    fn status_line(&self, elapsed: std::time::Duration) -> String {
+        let s = &self.stats;
+        let fps = s.processed as f64 / elapsed.as_secs_f64().max(1e-3);
+        let last = match self.last_slope_deg {
+            Some(slope) => format!("{slope:+.2}°"),
+            None => "-".to_string(),
+        };
+        format!(
+            "{} frames in {:.0} s ({fps:.1} fps), {} dropped, last slope {last}",
+            s.processed,
+            elapsed.as_secs_f64(),
+            s.dropped
+        )
+    }
+
     fn done(&self) -> bool {
         self.max_frames
             .is_some_and(|max| self.stats.processed >= max)
@@ -181,6 +208,9 @@ impl Worker<'_> {
             ..SlopeEstimate::default()
         };
         estimate.write_message(&mut message);
+        if estimate.slope_deg.is_finite() {
+            self.last_slope_deg = Some(estimate.slope_deg);
+        }
         drop(sample);
         let sent = self.publisher.publish(&message)?;
         self.stats.processed += 1;

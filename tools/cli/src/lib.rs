@@ -13,3 +13,4 @@ pub mod mount_args;
 pub mod record;
 pub mod render;
 pub mod replay;
+pub mod service_manager;

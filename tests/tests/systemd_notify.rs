@@ -1,0 +1,97 @@
+//! The systemd notify protocol without systemd: the test binds the
+//! datagram socket systemd would (`NOTIFY_SOCKET`), asks for a watchdog
+//! (`WATCHDOG_USEC`), runs the real estimator with a replay feeding it, and
+//! reads what the estimator tells the service manager.
+
+use std::os::unix::net::UnixDatagram;
+use std::time::{Duration, Instant};
+
+use nix::sys::signal::Signal;
+use slope_integration_tests::{deadline, recording, unique_prefix, Proc};
+
+/// Datagrams until `until` is among them or `by` passes.
+fn read_until(socket: &UnixDatagram, seen: &mut Vec<String>, until: &str, by: Instant) -> bool {
+    let mut buf = [0u8; 4096];
+    while Instant::now() < by {
+        if seen.iter().any(|m| m.lines().any(|l| l.starts_with(until))) {
+            return true;
+        }
+        if let Ok(n) = socket.recv(&mut buf) {
+            seen.push(String::from_utf8_lossy(&buf[..n]).into_owned());
+        }
+    }
+    seen.iter().any(|m| m.lines().any(|l| l.starts_with(until)))
+}
+
+#[test]
+fn the_estimator_speaks_the_notify_protocol() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("notify.sock");
+    let socket = UnixDatagram::bind(&path).expect("bind the notify socket");
+    socket
+        .set_read_timeout(Some(Duration::from_millis(100)))
+        .expect("timeout");
+    let prefix = unique_prefix("notify");
+    let notify = path.to_str().expect("utf-8 path");
+    let mut estimator = Proc::spawn_with_env(
+        "slope-estimator",
+        ["--service-prefix", prefix.as_str()],
+        &[("NOTIFY_SOCKET", notify), ("WATCHDOG_USEC", "400000")],
+    );
+    let mut seen = Vec::new();
+    assert!(
+        read_until(&socket, &mut seen, "READY=1", deadline(20.0)),
+        "{seen:?}\n{}",
+        estimator.diagnostics()
+    );
+    let rec = recording("ramp16-clean");
+    let mut replay = Proc::spawn(
+        "slope-replay",
+        [
+            rec.to_str().expect("utf-8"),
+            "--service-prefix",
+            &prefix,
+            "--rate",
+            "10",
+        ],
+    );
+    // The watchdog is pinged at half its interval, the status says how it goes.
+    assert!(
+        read_until(&socket, &mut seen, "WATCHDOG=1", deadline(5.0)),
+        "{seen:?}"
+    );
+    let by = deadline(20.0);
+    while Instant::now() < by
+        && !seen
+            .iter()
+            .any(|m| m.starts_with("STATUS=") && !m.contains("STATUS=0 frames"))
+    {
+        read_until(
+            &socket,
+            &mut seen,
+            "never",
+            Instant::now() + Duration::from_millis(500),
+        );
+    }
+    let status = seen
+        .iter()
+        .rev()
+        .find(|m| m.starts_with("STATUS=") && m.contains("fps"))
+        .unwrap_or_else(|| panic!("no status line: {seen:?}"));
+    assert!(
+        status.contains("dropped") && status.contains("last slope"),
+        "{status}"
+    );
+    replay.wait_exit(deadline(20.0));
+    estimator.signal(Signal::SIGTERM);
+    assert!(
+        read_until(&socket, &mut seen, "STOPPING=1", deadline(5.0)),
+        "{seen:?}"
+    );
+    let exit = estimator.wait_exit(deadline(5.0));
+    assert!(
+        exit.is_some_and(|s| s.success()),
+        "{}",
+        estimator.diagnostics()
+    );
+}
