@@ -1,5 +1,6 @@
 //! A program waiting on a silent topic says so after a few seconds, naming
-//! the service (with its prefix) and what should publish on it.
+//! the service (with its prefix) and what should publish on it; the
+//! estimator logs its throughput every 10 s all the same.
 
 use nix::sys::signal::Signal;
 use slope_integration_tests::{deadline, unique_prefix, Proc};
@@ -20,6 +21,11 @@ fn silent_topics_are_named_in_the_log() {
         let mut proc = Proc::spawn(program, ["--service-prefix", prefix.as_str()]);
         let line = proc.wait_stderr(&note, deadline(20.0));
         assert!(line.is_some(), "{program}: {}", proc.diagnostics());
+        if program == "slope-estimator" {
+            // Its throughput summary every 10 s, for the journal.
+            let summary = proc.wait_stderr("0 frames in 10 s (0.0 fps), 0 dropped", deadline(20.0));
+            assert!(summary.is_some(), "{}", proc.diagnostics());
+        }
         proc.signal(Signal::SIGTERM);
         let status = proc.wait_exit(deadline(2.0));
         assert!(

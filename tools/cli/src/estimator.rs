@@ -86,6 +86,9 @@ pub struct EstimatorStats {
     pub dropped: u64,
 }
 
+/// How often the estimator logs its throughput (the journal's view of it).
+pub const SUMMARY_INTERVAL: std::time::Duration = std::time::Duration::from_secs(10);
+
 pub fn run(args: &EstimatorArgs, stop: &StopFlag) -> anyhow::Result<EstimatorStats> {
     let config = load_config(args.config.as_ref(), args.method)?;
     let names = args.common.service_names();
@@ -115,6 +118,7 @@ pub fn run(args: &EstimatorArgs, stop: &StopFlag) -> anyhow::Result<EstimatorSta
     let mut manager = ServiceManager::from_env();
     manager.ready("waiting for clouds");
     let started = Instant::now();
+    let mut last_summary = started;
     let result = wait_loop(subscriber.listener(), stop, || {
         let processed = worker.stats.processed;
         worker.on_cloud_event()?;
@@ -123,6 +127,10 @@ pub fn run(args: &EstimatorArgs, stop: &StopFlag) -> anyhow::Result<EstimatorSta
         }
         silence.tick();
         manager.tick(|| worker.status_line(started.elapsed()));
+        if last_summary.elapsed() >= SUMMARY_INTERVAL {
+            tracing::info!("{}", worker.status_line(started.elapsed()));
+            last_summary = Instant::now();
+        }
         Ok(!worker.done())
     });
     manager.stopping();
