@@ -34,7 +34,8 @@ use crate::tracking::{FrameSlope, SlopeTracker, TrackedSlope};
 pub struct FrameInfo {
     /// Frame index (the cloud header's `frame_index`).
     pub index: u64,
-    /// Capture time, nanoseconds (any epoch; differences are used).
+    /// Capture time, nanoseconds (any epoch). Carried with the frame; the
+    /// tracker counts frames, not time.
     pub stamp_ns: u64,
 }
 

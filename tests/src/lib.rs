@@ -186,6 +186,23 @@ impl Proc {
         }
     }
 
+    /// Asserts that the process exits with status 0 within `within`.
+    pub fn assert_exits_zero_within(&mut self, within: Duration) {
+        let status = self.wait_exit(Instant::now() + within);
+        let diagnostics = self.diagnostics();
+        let status = status.unwrap_or_else(|| {
+            panic!(
+                "{} did not exit within {within:?}\n{diagnostics}",
+                self.name
+            )
+        });
+        assert!(
+            status.success(),
+            "{} exited with {status}\n{diagnostics}",
+            self.name
+        );
+    }
+
     pub fn signal(&self, signal: Signal) {
         let pid = Pid::from_raw(i32::try_from(self.child.id()).expect("pid fits in i32"));
         kill(pid, signal).unwrap_or_else(|e| panic!("cannot signal {}: {e}", self.name));

@@ -4,7 +4,7 @@
 
 use std::collections::HashSet;
 use std::path::Path;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use nix::sys::signal::Signal;
 use serde_json::Value;
@@ -53,23 +53,6 @@ fn read_json_lines(echo: &mut Proc, count: usize, seconds: f64) -> Vec<Value> {
         lines.push(value);
     }
     lines
-}
-
-fn assert_exits_zero_within(proc: &mut Proc, within: Duration) {
-    let started = Instant::now();
-    let status = proc.wait_exit(started + within);
-    let diagnostics = proc.diagnostics();
-    let status = status.unwrap_or_else(|| {
-        panic!(
-            "{} did not exit within {within:?}\n{diagnostics}",
-            proc.name
-        )
-    });
-    assert!(
-        status.success(),
-        "{} exited with {status}\n{diagnostics}",
-        proc.name
-    );
 }
 
 /// Every key of `slope-echo --json`: the fields of `slope.SlopeEstimate.v2`.
@@ -228,10 +211,10 @@ fn every_frame_gives_one_estimate_in_order_within_a_degree() {
         check_v2_fields(e, truth);
     }
 
-    assert_exits_zero_within(&mut echo, Duration::from_secs(5));
-    assert_exits_zero_within(&mut replay, Duration::from_secs(10));
+    echo.assert_exits_zero_within(Duration::from_secs(5));
+    replay.assert_exits_zero_within(Duration::from_secs(10));
     estimator.signal(Signal::SIGTERM);
-    assert_exits_zero_within(&mut estimator, Duration::from_secs(1));
+    estimator.assert_exits_zero_within(Duration::from_secs(1));
 }
 
 #[test]
@@ -267,7 +250,7 @@ fn sigterm_ends_every_process_with_status_zero_within_a_second() {
     );
     for proc in [&mut replay, &mut estimator, &mut echo] {
         proc.signal(Signal::SIGTERM);
-        assert_exits_zero_within(proc, Duration::from_secs(1));
+        proc.assert_exits_zero_within(Duration::from_secs(1));
     }
 }
 
@@ -293,7 +276,7 @@ fn sigint_stops_a_replay_waiting_for_subscribers() {
         replay.diagnostics()
     );
     replay.signal(Signal::SIGINT);
-    assert_exits_zero_within(&mut replay, Duration::from_secs(1));
+    replay.assert_exits_zero_within(Duration::from_secs(1));
 }
 
 /// Zero-copy, shown from the outside: the estimator logs the address of the
@@ -360,7 +343,7 @@ fn estimator_reads_the_cloud_in_the_publishers_shared_memory() {
     );
     for proc in [&mut replay, &mut estimator] {
         proc.signal(Signal::SIGTERM);
-        assert_exits_zero_within(proc, Duration::from_secs(1));
+        proc.assert_exits_zero_within(Duration::from_secs(1));
     }
 }
 

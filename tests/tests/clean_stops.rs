@@ -2,17 +2,10 @@
 //! were waiting for data or streaming it (a signal that interrupts an
 //! iceoryx2 wait is a stop request, not an error).
 
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use nix::sys::signal::Signal;
 use slope_integration_tests::{deadline, recording, unique_prefix, Proc};
-
-fn assert_exits_zero_within(proc: &mut Proc, within: Duration) {
-    let status = proc.wait_exit(Instant::now() + within);
-    let diagnostics = proc.diagnostics();
-    let status = status.unwrap_or_else(|| panic!("no exit within {within:?}\n{diagnostics}"));
-    assert!(status.success(), "exited with {status}\n{diagnostics}");
-}
 
 /// slope-record waiting for clouds that never come.
 #[test]
@@ -37,7 +30,7 @@ fn a_waiting_recorder_stops_cleanly() {
             record.diagnostics()
         );
         record.signal(signal);
-        assert_exits_zero_within(&mut record, Duration::from_secs(2));
+        record.assert_exits_zero_within(Duration::from_secs(2));
     }
 }
 
@@ -67,7 +60,7 @@ fn a_streaming_demo_stops_cleanly_with_its_summary() {
     }
     assert!(frame.is_some(), "no estimate line\n{}", demo.diagnostics());
     demo.signal(Signal::SIGINT);
-    assert_exits_zero_within(&mut demo, Duration::from_secs(3));
+    demo.assert_exits_zero_within(Duration::from_secs(3));
     let mut rest = Vec::new();
     while let Some(line) = demo.stdout_line(deadline(1.0)) {
         rest.push(line);
