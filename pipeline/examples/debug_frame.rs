@@ -15,7 +15,7 @@ use slope_pipeline::normals::NormalEstimator;
 use slope_pipeline::pass_through::PassThrough;
 use slope_pipeline::ransac_planes::PlaneSegmenter;
 use slope_pipeline::ransac_planes::Threshold;
-use slope_pipeline::selection::{plane_quality, select_planes, Ground, PlaneSummary};
+use slope_pipeline::selection::{select_planes, Ground, PlaneSummary};
 use slope_pipeline::statistical_outlier::StatisticalOutlierFilter;
 use slope_pipeline::EstimatorConfig;
 
@@ -41,17 +41,7 @@ fn main() {
     let threshold = Threshold::of(&config.ransac);
     let summaries: Vec<PlaneSummary> = planes
         .iter()
-        .map(|p| PlaneSummary {
-            plane: p.plane,
-            inliers: p.inliers.len(),
-            bottom_pixels: p
-                .inliers
-                .iter()
-                .filter(|&&i| i as usize / w >= view.height - view.height / 3)
-                .count(),
-            centroid: p.centroid,
-            quality: plane_quality(&view, &p.plane, &p.inliers, &threshold),
-        })
+        .map(|p| PlaneSummary::of(&view, p, &threshold))
         .collect();
     for (i, s) in summaries.iter().enumerate() {
         let (u0, v0, u1, v1) =

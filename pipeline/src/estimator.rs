@@ -23,8 +23,7 @@ use crate::pass_through::PassThrough;
 use crate::plane_fit::{fit_least_squares, fit_tls, Moments, Plane};
 use crate::ransac_planes::{PlaneSegmenter, SegmentedPlane, Threshold};
 use crate::selection::{
-    axis_distance, plane_quality, select_planes, slope_sign, Ground, PlaneQuality, PlaneSummary,
-    Selection,
+    axis_distance, select_planes, slope_sign, Ground, PlaneQuality, PlaneSummary, Selection,
 };
 use crate::statistical_outlier::StatisticalOutlierFilter;
 use crate::tracking::{FrameSlope, SlopeTracker, TrackedSlope};
@@ -317,22 +316,13 @@ impl Estimator {
     /// What the selection needs of every segmented plane.
     fn summarize_planes(&mut self, cloud: &CloudView<'_>) {
         let threshold = Threshold::of(&self.config.ransac);
-        let bottom_start = (cloud.height - cloud.height / 3) * cloud.width;
         self.summaries.clear();
-        self.summaries
-            .extend(self.segmenter.planes().iter().map(|p| {
-                PlaneSummary {
-                    plane: p.plane,
-                    inliers: p.inliers.len(),
-                    bottom_pixels: p
-                        .inliers
-                        .iter()
-                        .filter(|&&i| i as usize >= bottom_start)
-                        .count(),
-                    centroid: p.centroid,
-                    quality: plane_quality(cloud, &p.plane, &p.inliers, &threshold),
-                }
-            }));
+        self.summaries.extend(
+            self.segmenter
+                .planes()
+                .iter()
+                .map(|p| PlaneSummary::of(cloud, p, &threshold)),
+        );
     }
 }
 

@@ -30,8 +30,10 @@ pub mod quality;
 use nalgebra::Vector3;
 use slope_ipc_types::EstimateStatus;
 
+use crate::cloud::CloudView;
 use crate::config::SelectionConfig;
 use crate::plane_fit::Plane;
+use crate::ransac_planes::{SegmentedPlane, Threshold};
 
 pub use ground::Ground;
 pub use inclined::{axis_distance, forward_direction, slope_sign};
@@ -60,6 +62,25 @@ pub struct Selection {
     pub up: Vector3<f64>,
     /// The robot's forward direction (unit, perpendicular to `up`).
     pub forward: Vector3<f64>,
+}
+
+impl PlaneSummary {
+    /// The summary of a segmented plane of `cloud`; `threshold` is the
+    /// RANSAC inlier distance the plane was found with.
+    pub fn of(cloud: &CloudView<'_>, plane: &SegmentedPlane, threshold: &Threshold) -> Self {
+        let bottom_start = (cloud.height - cloud.height / 3) * cloud.width;
+        Self {
+            plane: plane.plane,
+            inliers: plane.inliers.len(),
+            bottom_pixels: plane
+                .inliers
+                .iter()
+                .filter(|&&i| i as usize >= bottom_start)
+                .count(),
+            centroid: plane.centroid,
+            quality: plane_quality(cloud, &plane.plane, &plane.inliers, threshold),
+        }
+    }
 }
 
 /// True when the plane is flat at the sensor's noise level.
