@@ -29,7 +29,9 @@ fn main() {
     let config = match std::env::var("CONFIG") {
         Ok(text) => EstimatorConfig::from_toml_str(&text).expect("CONFIG"),
         Err(_) => EstimatorConfig::default(),
-    };
+    }
+    .for_sensor(rec.sensor());
+    let noise = config.selection.noise_model.unwrap_or_default();
     let mut keep = Vec::new();
     let stats = StatisticalOutlierFilter::new().filter(&view, &config.outlier, &mut keep);
     println!("outlier: {stats:?}");
@@ -41,7 +43,7 @@ fn main() {
     let threshold = Threshold::of(&config.ransac);
     let summaries: Vec<PlaneSummary> = planes
         .iter()
-        .map(|p| PlaneSummary::of(&view, p, &threshold))
+        .map(|p| PlaneSummary::of(&view, p, &threshold, noise))
         .collect();
     for (i, s) in summaries.iter().enumerate() {
         let (u0, v0, u1, v1) =
@@ -54,8 +56,8 @@ fn main() {
                 });
         let q = &s.quality;
         println!(
-            "plane {i}: n [{:+.4} {:+.4} {:+.4}] d {:.3} inliers {} rms {:.4} rel {:.2} area {:.2} border {:.2} centroid [{:.2} {:.2} {:.2}] up-angle {:.2} bbox u {u0}..{u1} v {v0}..{v1}",
-            s.plane.normal.x, s.plane.normal.y, s.plane.normal.z, s.plane.d, s.inliers, q.rms_m, q.relative_rms, q.area_m2, q.border_fraction,
+            "plane {i}: n [{:+.4} {:+.4} {:+.4}] d {:.3} inliers {} rms {:.4} rel {:.2} noise {:.1} area {:.2} border {:.2} centroid [{:.2} {:.2} {:.2}] up-angle {:.2} bbox u {u0}..{u1} v {v0}..{v1}",
+            s.plane.normal.x, s.plane.normal.y, s.plane.normal.z, s.plane.d, s.inliers, q.rms_m, q.relative_rms, q.noise_ratio, q.area_m2, q.border_fraction,
             s.centroid.x, s.centroid.y, s.centroid.z,
             up.map_or(f64::NAN, |u| angle_between_deg(&s.plane.normal, &u))
         );

@@ -31,7 +31,6 @@ fn main() {
             Ok(text) => EstimatorConfig::from_toml_str(&text).expect("CONFIG"),
             Err(_) => EstimatorConfig::default(),
         };
-        let mut est = Estimator::new(EstimatorConfig { method, ..base });
         for dir in &dirs {
             let rec = match common::Recording::open(Path::new(dir)) {
                 Ok(r) => r,
@@ -40,6 +39,11 @@ fn main() {
                     continue;
                 }
             };
+            let config = EstimatorConfig {
+                method,
+                ..base.clone()
+            };
+            let mut est = Estimator::new(config.for_sensor(rec.sensor()));
             let mut slopes = Vec::new();
             let mut stds = Vec::new();
             let mut stages: Vec<(&'static str, f64)> = Vec::new();

@@ -7,7 +7,7 @@
 //! | reason | applies when | factor |
 //! |---|---|---|
 //! | `few_points` | a chosen plane has fewer than 3000 pixels | `max(n / 3000, 0.2)` |
-//! | `rough_plane` | a chosen plane's relative RMS is above 0.3 | down to 0.5 at 0.45 |
+//! | `rough_plane` | a chosen plane's relative RMS is above 0.3, or the inclined plane's noise ratio above 2.5 | down to 0.5 at 0.45 (3.5) |
 //! | `small_area` | the inclined plane covers under 0.05 m^2 | `max(area / 0.05, 0.3)` |
 //! | `ground_from_mount` | no ground plane was seen | 0.7 |
 //! | `near_border` | over 30 % of a plane's pixels are within 8 px of the border | `1 - (share - 0.3)`, at least 0.5 |
@@ -25,6 +25,11 @@ pub const FEW_PIXELS: usize = 3000;
 pub const ROUGH_RELATIVE_RMS: f64 = 0.3;
 /// ...to half at this (the selection's default flatness limit).
 pub const ROUGH_HALF_AT: f64 = 0.45;
+/// An inclined plane's noise ratio (RMS in standard deviations of the
+/// sensor's noise) above this lowers the confidence...
+pub const ROUGH_NOISE_RATIO: f64 = 2.5;
+/// ...to half at this (the selection's default limit).
+pub const ROUGH_NOISE_HALF_AT: f64 = 3.5;
 /// An inclined plane smaller than this lowers the confidence, m^2.
 pub const SMALL_AREA_M2: f64 = 0.05;
 /// The factor for a ground taken from the mount.
@@ -73,11 +78,19 @@ pub fn confidence(
     method_difference_deg: Option<f64>,
 ) -> Confidence {
     let mut c = Confidence::full();
-    for plane in std::iter::once(inclined).chain(ground) {
+    let is_inclined = std::iter::once(true).chain(ground.map(|_| false));
+    for (plane, is_inclined) in std::iter::once(inclined).chain(ground).zip(is_inclined) {
         let few = (plane.pixels as f64 / FEW_PIXELS as f64).max(0.2);
         c.lower(reason::FEW_POINTS, few);
-        let excess = (plane.quality.relative_rms - ROUGH_RELATIVE_RMS).max(0.0);
-        let rough = 1.0 - 0.5 * (excess / (ROUGH_HALF_AT - ROUGH_RELATIVE_RMS)).min(1.0);
+        let q = &plane.quality;
+        let mut rough = falling(q.relative_rms, ROUGH_RELATIVE_RMS, ROUGH_HALF_AT);
+        if is_inclined {
+            rough = rough.min(falling(
+                q.noise_ratio,
+                ROUGH_NOISE_RATIO,
+                ROUGH_NOISE_HALF_AT,
+            ));
+        }
         c.lower(reason::ROUGH_PLANE, rough);
         let border = 1.0 - (plane.quality.border_fraction - BORDER_SHARE).max(0.0);
         c.lower(reason::NEAR_BORDER, border.max(0.5));
@@ -98,6 +111,12 @@ pub fn confidence(
     c
 }
 
+/// 1 up to `from`, falling linearly to 0.5 at `half_at`, 0.5 beyond.
+fn falling(value: f64, from: f64, half_at: f64) -> f64 {
+    let excess = (value - from).max(0.0);
+    1.0 - 0.5 * (excess / (half_at - from)).min(1.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -110,8 +129,28 @@ mod tests {
                 relative_rms,
                 area_m2,
                 border_fraction: border,
+                noise_ratio: 1.2,
             },
         }
+    }
+
+    /// A plane flat within its band but `noise_ratio` sensor deviations rough.
+    fn rough_at_noise_level(noise_ratio: f64) -> ChosenPlane {
+        let mut p = plane(20_000, 0.15, 1.0, 0.0);
+        p.quality.noise_ratio = noise_ratio;
+        p
+    }
+
+    /// A ground rough at the noise level (a bent floor) is no reason; the
+    /// plane the slope is measured on is.
+    #[test]
+    fn only_the_inclined_plane_is_judged_at_the_noise_level() {
+        let good = plane(20_000, 0.15, 1.0, 0.05);
+        let c = confidence(&good, Some(&rough_at_noise_level(3.3)), None);
+        assert_eq!(c, Confidence::full());
+        let c = confidence(&rough_at_noise_level(3.5), Some(&good), None);
+        assert_eq!(c.reasons, reason::ROUGH_PLANE);
+        assert!((c.value - 0.5).abs() < 1e-12, "{}", c.value);
     }
 
     #[test]
@@ -145,6 +184,13 @@ mod tests {
                 None,
                 reason::SMALL_AREA,
                 0.5,
+            ),
+            (
+                rough_at_noise_level(3.0),
+                Some(good),
+                None,
+                reason::ROUGH_PLANE,
+                0.75,
             ),
             (good, None, None, reason::GROUND_FROM_MOUNT, 0.7),
             (

@@ -34,6 +34,8 @@
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use slope_ipc_types::SlopeMethod;
 
+use crate::sensor_noise::NoiseModel;
+
 pub use crate::tracking::TrackingConfig;
 
 /// The method named on command lines and in config files:
@@ -297,6 +299,22 @@ pub struct SelectionConfig {
     /// Kinect floors and walls 0.1-0.3), a surface that fills the band
     /// evenly 0.58.
     pub max_relative_rms: f64,
+    /// The sensor's noise model (`"kinect2"` or `"kinect1"`) that flatness
+    /// is judged against. Unset: the recording's `sensor` decides where the
+    /// frames come from a recording (`slope-eval`), else `"kinect2"` (the
+    /// camera `slope-capture` drives).
+    pub noise_model: Option<NoiseModel>,
+    /// An inclined plane (the surface the slope is measured on) is flat when
+    /// the RMS of its inliers' distances, in standard deviations of the
+    /// noise model, is at most this (real Kinect v2 risers and walls 1.2-2.6,
+    /// the Kinect v1 office walls 0.6-1.0 with their model; a bed's fabric
+    /// side 3.8-5.8).
+    pub max_noise_ratio: f64,
+    /// An inclined plane covers at least this much surface, square metres
+    /// (a 20 x 20 cm patch; real stair risers 0.07-0.14): smaller flat
+    /// patches are clutter, or pieces RANSAC carved out of a rough surface,
+    /// which look flatter the smaller they are.
+    pub inclined_min_area_m2: f64,
     /// With a mount: a ground candidate's normal is within this of the
     /// mount's up vector, degrees.
     pub ground_max_tilt_deg: f64,
@@ -333,6 +351,9 @@ impl Default for SelectionConfig {
     fn default() -> Self {
         Self {
             max_relative_rms: 0.45,
+            noise_model: None,
+            max_noise_ratio: 3.5,
+            inclined_min_area_m2: 0.04,
             ground_max_tilt_deg: 15.0,
             unmounted_ground_max_tilt_deg: 50.0,
             ground_min_pixels: 2000,
@@ -348,6 +369,16 @@ impl Default for SelectionConfig {
 }
 
 impl EstimatorConfig {
+    /// This configuration for frames of the named sensor (a recording's
+    /// `sensor`): an unset `selection.noise_model` becomes that sensor's
+    /// ([`NoiseModel::for_sensor`]); a configured one is kept.
+    pub fn for_sensor(mut self, sensor: &str) -> Self {
+        self.selection
+            .noise_model
+            .get_or_insert(NoiseModel::for_sensor(sensor));
+        self
+    }
+
     /// Parses a TOML document; missing keys keep their defaults. The result
     /// is validated.
     pub fn from_toml_str(text: &str) -> Result<Self, ConfigError> {
@@ -493,6 +524,8 @@ impl EstimatorConfig {
         }
         for (key, value) in [
             ("selection.max_relative_rms", s.max_relative_rms),
+            ("selection.max_noise_ratio", s.max_noise_ratio),
+            ("selection.inclined_min_area_m2", s.inclined_min_area_m2),
             ("selection.ground_min_area_m2", s.ground_min_area_m2),
             (
                 "selection.ground_height_tolerance_m",

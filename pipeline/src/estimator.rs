@@ -316,12 +316,13 @@ impl Estimator {
     /// What the selection needs of every segmented plane.
     fn summarize_planes(&mut self, cloud: &CloudView<'_>) {
         let threshold = Threshold::of(&self.config.ransac);
+        let noise = self.config.selection.noise_model.unwrap_or_default();
         self.summaries.clear();
         self.summaries.extend(
             self.segmenter
                 .planes()
                 .iter()
-                .map(|p| PlaneSummary::of(cloud, p, &threshold)),
+                .map(|p| PlaneSummary::of(cloud, p, &threshold, noise)),
         );
     }
 }
@@ -563,7 +564,7 @@ impl<'a> PlaneSegment<'a> {
         pixels.clear();
         let mut centroid = Vector3::zeros();
         let mut quality = PlaneQuality::default();
-        let (mut rms2, mut relative2) = (0.0, 0.0);
+        let (mut rms2, mut relative2, mut noise2) = (0.0, 0.0, 0.0);
         for &k in members {
             let (p, q) = (&planes[k], &summaries[k].quality);
             pixels.extend_from_slice(&p.inliers);
@@ -571,6 +572,7 @@ impl<'a> PlaneSegment<'a> {
             centroid += p.centroid * n;
             rms2 += p.rms_m.powi(2) * n;
             relative2 += q.relative_rms.powi(2) * n;
+            noise2 += q.noise_ratio.powi(2) * n;
             quality.area_m2 += q.area_m2;
             quality.border_fraction += q.border_fraction * n;
         }
@@ -578,6 +580,7 @@ impl<'a> PlaneSegment<'a> {
         let n = pixels.len().max(1) as f64;
         quality.rms_m = (rms2 / n).sqrt();
         quality.relative_rms = (relative2 / n).sqrt();
+        quality.noise_ratio = (noise2 / n).sqrt();
         quality.border_fraction /= n;
         Self {
             inliers: pixels,

@@ -15,6 +15,7 @@
 //! | `cumulative_angle.rs` | 6. cumulative averaging of the angle |
 //! | `plane_fit.rs` | TLS and least-squares plane fits (baselines) |
 //! | `selection/` | plane quality; which plane is the ground, which the inclined plane; sign, distance |
+//! | `sensor_noise.rs` | the depth sensor's noise, the yardstick of flatness |
 //! | `confidence.rs` | how far to trust an estimate, and why |
 //! | `tracking.rs` | the slope of the plane ahead followed over frames |
 //! | `message.rs` | an estimate written into the `SlopeEstimate` message |
@@ -38,6 +39,7 @@ pub mod pass_through;
 pub mod plane_fit;
 pub mod ransac_planes;
 pub mod selection;
+pub mod sensor_noise;
 pub mod statistical_outlier;
 pub mod tracking;
 
@@ -47,4 +49,5 @@ pub use config::{
     OutlierConfig, PassThroughConfig, RansacConfig, SelectionConfig, TrackingConfig,
 };
 pub use estimator::{Estimate, Estimator, FrameInfo, PlaneEstimate, StageTimings};
+pub use sensor_noise::NoiseModel;
 pub use slope_ipc_types::{EstimateStatus, SlopeMethod};

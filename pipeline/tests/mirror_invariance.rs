@@ -20,11 +20,14 @@ const MAX_ERROR_DEG: f64 = 1.5;
 const MAX_MIRROR_GAP_DEG: f64 = 0.3;
 
 fn slope(frame: &Frame, method: SlopeMethod, seed: u64) -> Result<f64, String> {
-    let mut est = Estimator::new(EstimatorConfig {
-        method,
-        seed,
-        ..EstimatorConfig::default()
-    });
+    let mut est = Estimator::new(
+        EstimatorConfig {
+            method,
+            seed,
+            ..EstimatorConfig::default()
+        }
+        .for_sensor(&frame.sensor),
+    );
     let e = est.estimate(&frame.view());
     if e.status == EstimateStatus::Ok {
         Ok(e.slope_deg.abs())
@@ -118,6 +121,7 @@ fn simulated(scene: &Scene, seed: u64) -> [Frame; 2] {
         height: cloud.height,
         intrinsics: cloud.intrinsics,
         mount: cloud.mount,
+        sensor: "synthetic".into(),
     };
     let mirrored = Frame {
         points,

@@ -17,11 +17,14 @@ fn measure(name: &str, method: SlopeMethod, seed: u64) -> Option<f64> {
     let dir = common::shared_data(name)?;
     let rec = common::Recording::open(&dir).expect("recording");
     let frame = rec.frame(0).expect("frame 0");
-    let mut est = Estimator::new(EstimatorConfig {
-        method,
-        seed,
-        ..EstimatorConfig::default()
-    });
+    let mut est = Estimator::new(
+        EstimatorConfig {
+            method,
+            seed,
+            ..EstimatorConfig::default()
+        }
+        .for_sensor(rec.sensor()),
+    );
     let e = est.estimate(&frame.view());
     assert_eq!(
         e.status,

@@ -6,7 +6,7 @@
 
 use std::path::Path;
 
-use slope_ipc_types::{confidence, CloudPoint};
+use slope_ipc_types::CloudPoint;
 use slope_pipeline::{Estimate, EstimateStatus, Estimator, EstimatorConfig, FrameInfo};
 use slope_sensor::recording::Recording;
 use slope_synth::{parse_scene, write_recording};
@@ -107,19 +107,24 @@ fn a_table_hiding_the_floor_is_not_the_ground() {
 }
 
 /// A bed-like block 0.6 m high with a bumpy fabric cover in front of a
-/// camera 1.2 m high, the floor beside it: the floor is the ground, never the
-/// bed top (rejected as rough, and higher). The soft side is not always
-/// rejected (pieces of it are within the flatness limit); an estimate on it
-/// carries the `rough_plane` reason.
+/// camera 1.2 m high, the floor beside it: the soft side, flat within the
+/// RANSAC band (pieces of it very nearly) but not at the sensor's noise
+/// level, is no slope. (Without `max_noise_ratio` it was reported `ok` at
+/// 89-95 degrees; without `inclined_min_area_m2` a 0.027 m^2 piece was.)
 #[test]
-fn a_bed_is_not_the_ground_and_its_soft_side_is_flagged() {
+fn a_bed_s_soft_side_is_not_a_slope() {
     let e = estimates("bed", &scene_file("soft_block_bed.toml"));
-    assert!(e.iter().all(|e| e.ground.is_some()), "{e:?}");
+    assert_no_ramp(&e);
+}
+
+/// The same bed on the left, a 12 degree ramp ahead on the right: the
+/// ramp is measured (the nearer fabric side is not flat at the sensor's
+/// noise level), on the floor, not on the bed top.
+#[test]
+fn a_ramp_beside_a_bed_is_measured_on_the_floor() {
+    let e = estimates("bed_ramp", &scene_file("bed_beside_ramp.toml"));
+    assert_measures(&e, 12.0, 0.5);
     assert_ground_at(&e, 1.2);
-    for e in e.iter().filter(|e| e.status == EstimateStatus::Ok) {
-        assert_ne!(e.confidence_reasons & confidence::ROUGH_PLANE, 0, "{e:?}");
-        assert!(e.confidence < 0.9, "{e:?}");
-    }
 }
 
 /// A ceiling over a flat floor faces down: never a slope.

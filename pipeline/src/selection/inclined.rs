@@ -1,6 +1,8 @@
 //! The inclined plane: the ramp, wall or riser the slope is measured on.
 //!
-//! A candidate is a flat plane (see [`super::is_flat`]) that is not part of
+//! A candidate is a plane flat at the sensor's noise level (see
+//! [`super::is_flat_at_noise_level`]) of at least `inclined_min_area_m2`
+//! that is not part of
 //! the ground and
 //!
 //! - is inclined: its normal is more than `parallel_tolerance_deg` from the
@@ -20,7 +22,7 @@
 
 use nalgebra::Vector3;
 
-use super::{is_flat, PlaneSummary};
+use super::{is_flat_at_noise_level, PlaneSummary};
 use crate::cloud::angle_between_deg;
 use crate::config::SelectionConfig;
 use crate::plane_fit::Plane;
@@ -42,7 +44,8 @@ pub fn choose_inclined(
             let angle = angle_between_deg(&n, up);
             let horizontal = n - up * n.dot(up);
             let h = horizontal.norm();
-            is_flat(p, config)
+            is_flat_at_noise_level(p, config)
+                && p.quality.area_m2 >= config.inclined_min_area_m2
                 && angle > config.parallel_tolerance_deg
                 && angle <= config.max_slope_deg
                 && h > 1e-9

@@ -34,6 +34,7 @@ use crate::cloud::CloudView;
 use crate::config::SelectionConfig;
 use crate::plane_fit::Plane;
 use crate::ransac_planes::{SegmentedPlane, Threshold};
+use crate::sensor_noise::NoiseModel;
 
 pub use ground::Ground;
 pub use inclined::{axis_distance, forward_direction, slope_sign};
@@ -66,8 +67,13 @@ pub struct Selection {
 
 impl PlaneSummary {
     /// The summary of a segmented plane of `cloud`; `threshold` is the
-    /// RANSAC inlier distance the plane was found with.
-    pub fn of(cloud: &CloudView<'_>, plane: &SegmentedPlane, threshold: &Threshold) -> Self {
+    /// RANSAC inlier distance the plane was found with, `noise` the sensor's.
+    pub fn of(
+        cloud: &CloudView<'_>,
+        plane: &SegmentedPlane,
+        threshold: &Threshold,
+        noise: NoiseModel,
+    ) -> Self {
         let bottom_start = (cloud.height - cloud.height / 3) * cloud.width;
         Self {
             plane: plane.plane,
@@ -78,14 +84,21 @@ impl PlaneSummary {
                 .filter(|&&i| i as usize >= bottom_start)
                 .count(),
             centroid: plane.centroid,
-            quality: plane_quality(cloud, &plane.plane, &plane.inliers, threshold),
+            quality: plane_quality(cloud, &plane.plane, &plane.inliers, threshold, noise),
         }
     }
 }
 
-/// True when the plane is flat at the sensor's noise level.
+/// True when the plane is flat within its RANSAC band: it does not fill the
+/// band evenly (the test every plane passes, ground segments included).
 pub fn is_flat(plane: &PlaneSummary, config: &SelectionConfig) -> bool {
     plane.quality.relative_rms <= config.max_relative_rms
+}
+
+/// True when the plane is flat at the sensor's noise level as well (the
+/// test the inclined plane passes: its normal is the measurement).
+pub fn is_flat_at_noise_level(plane: &PlaneSummary, config: &SelectionConfig) -> bool {
+    is_flat(plane, config) && plane.quality.noise_ratio <= config.max_noise_ratio
 }
 
 /// Chooses ground and inclined plane. `mount_up` is the mount's up vector

@@ -26,6 +26,8 @@ pub struct Frame {
     pub height: usize,
     pub intrinsics: Intrinsics,
     pub mount: Mount,
+    /// The recording's `sensor` ("synthetic" for a simulated cloud).
+    pub sensor: String,
 }
 
 impl Frame {
@@ -48,6 +50,11 @@ impl Recording {
             reader,
             truth_slope_deg,
         })
+    }
+
+    /// The recording's `sensor`.
+    pub fn sensor(&self) -> &str {
+        &self.reader.meta().sensor
     }
 
     /// Number of frames.
@@ -89,6 +96,7 @@ impl Recording {
             height: projector.height() as usize,
             intrinsics: projector.intrinsics(),
             mount,
+            sensor: self.sensor().to_owned(),
         })
     }
 }

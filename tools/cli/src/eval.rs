@@ -558,7 +558,12 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<EvalOutcome> {
             (Some(_), None) => frames.get(frames.len() / 2).map(|f| f.index),
         };
         // Fresh estimators: the tracked slope follows this recording only.
-        let mut estimators: Vec<Estimator> = configs.iter().cloned().map(Estimator::new).collect();
+        // Flatness is judged against this recording's sensor unless configured.
+        let sensor = &recording.meta().sensor;
+        let mut estimators: Vec<Estimator> = configs
+            .iter()
+            .map(|c| Estimator::new(c.clone().for_sensor(sensor)))
+            .collect();
         let (reports, kept) = evaluate_recording(
             recording,
             &label,
