@@ -13,7 +13,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use slope_ipc_types::{EstimateStatus, SlopeMethod};
 
-use crate::cloud::{angle_between_deg, is_measured, to_vec3, CloudView};
+use crate::cloud::{angle_between_deg, is_measured, CloudView};
 use crate::confidence::{confidence, ChosenPlane};
 use crate::config::EstimatorConfig;
 use crate::cosine_kmeans::CosineKmeans;
@@ -279,13 +279,12 @@ impl Estimator {
                 clock,
             )?,
             method => {
-                let fit = baseline_fit(cloud, &inclined, ground.as_ref(), &selection, method);
+                let fit = baseline_fit(&inclined, ground.as_ref(), &selection, method);
                 clock.lap("fit");
                 fit
             }
         };
         let estimate = finish(
-            cloud,
             self.config.method,
             &fit,
             &inclined,
@@ -448,15 +447,13 @@ impl PaperStages {
 
 /// The least-squares or TLS baseline: each plane's inliers fitted.
 fn baseline_fit(
-    cloud: &CloudView<'_>,
     inclined: &PlaneSegment<'_>,
     ground: Option<&PlaneSegment<'_>>,
     selection: &Selection,
     method: SlopeMethod,
 ) -> Fit {
-    let fit = |inliers: &[u32]| fit_inliers(cloud, inliers, method);
-    let incl_plane = fit(inclined.inliers);
-    let ground_plane = ground.and_then(|g| fit(g.inliers));
+    let incl_plane = inclined.fit(method);
+    let ground_plane = ground.and_then(|g| g.fit(method));
     let up = ground_plane.map_or(selection.up, |g| g.normal);
     Fit {
         inclined: incl_plane,
@@ -471,7 +468,6 @@ fn baseline_fit(
 /// The estimate from a method's fit: sign, distance, planes and confidence
 /// (the paper method checked against a TLS fit of the same pixels).
 fn finish(
-    cloud: &CloudView<'_>,
     method: SlopeMethod,
     fit: &Fit,
     inclined: &PlaneSegment<'_>,
@@ -487,9 +483,11 @@ fn finish(
     }
     let ground_plane = fit.ground.map(|p| p.oriented_towards(&Vector3::zeros()));
     let method_difference_deg = (method == SlopeMethod::Paper).then(|| {
-        let tls = |inliers: &[u32]| fit_inliers(cloud, inliers, SlopeMethod::Tls);
-        let up = ground.map_or(Some(selection.up), |g| tls(g.inliers).map(|p| p.normal));
-        let check = tls(inclined.inliers)
+        let up = ground.map_or(Some(selection.up), |g| {
+            g.fit(SlopeMethod::Tls).map(|p| p.normal)
+        });
+        let check = inclined
+            .fit(SlopeMethod::Tls)
             .zip(up)
             .map_or(f64::NAN, |(p, up)| angle_between_deg(&p.normal, &up));
         fit.angle_deg - check
@@ -516,23 +514,6 @@ fn finish(
     })
 }
 
-/// A least-squares or TLS plane through the measured `inliers`, oriented
-/// towards the camera.
-fn fit_inliers(cloud: &CloudView<'_>, inliers: &[u32], method: SlopeMethod) -> Option<Plane> {
-    let mut m = Moments::new();
-    for &i in inliers {
-        if let Some(p) = cloud.points.get(i as usize).filter(|p| is_measured(p)) {
-            m.add(&to_vec3(p));
-        }
-    }
-    let plane = if method == SlopeMethod::LeastSquares {
-        fit_least_squares(&m)
-    } else {
-        fit_tls(&m)
-    };
-    plane.map(|p| p.oriented_towards(&Vector3::zeros()))
-}
-
 /// The pixels of a chosen plane (one RANSAC plane, or the ground's
 /// segments together), their centroid and RMS distance from their plane.
 struct PlaneSegment<'a> {
@@ -540,6 +521,8 @@ struct PlaneSegment<'a> {
     centroid: Vector3<f64>,
     rms_m: f64,
     quality: PlaneQuality,
+    /// Moments of the pixels (their TLS and least-squares fits).
+    moments: Moments,
 }
 
 impl<'a> PlaneSegment<'a> {
@@ -550,6 +533,7 @@ impl<'a> PlaneSegment<'a> {
             centroid: plane.centroid,
             rms_m: plane.rms_m,
             quality: summary.quality,
+            moments: plane.moments,
         }
     }
 
@@ -565,8 +549,10 @@ impl<'a> PlaneSegment<'a> {
         let mut centroid = Vector3::zeros();
         let mut quality = PlaneQuality::default();
         let (mut rms2, mut relative2, mut noise2) = (0.0, 0.0, 0.0);
+        let mut moments = Moments::new();
         for &k in members {
             let (p, q) = (&planes[k], &summaries[k].quality);
+            moments.merge(&p.moments);
             pixels.extend_from_slice(&p.inliers);
             let n = p.inliers.len() as f64;
             centroid += p.centroid * n;
@@ -587,7 +573,19 @@ impl<'a> PlaneSegment<'a> {
             centroid: centroid / n,
             rms_m: quality.rms_m,
             quality,
+            moments,
         }
+    }
+
+    /// A least-squares or TLS plane through the pixels, oriented towards
+    /// the camera (from their moments: no pass over the pixels).
+    fn fit(&self, method: SlopeMethod) -> Option<Plane> {
+        let plane = if method == SlopeMethod::LeastSquares {
+            fit_least_squares(&self.moments)
+        } else {
+            fit_tls(&self.moments)
+        };
+        plane.map(|p| p.oriented_towards(&Vector3::zeros()))
     }
 
     fn chosen(&self) -> ChosenPlane {

@@ -93,6 +93,26 @@ impl Moments {
         self.count
     }
 
+    /// Adds every point of `other` (the moments of the union).
+    pub fn merge(&mut self, other: &Moments) {
+        if other.count == 0 {
+            return;
+        }
+        if self.count == 0 {
+            *self = *other;
+            return;
+        }
+        // other's points relative to self's origin: q + delta.
+        let delta = other.origin - self.origin;
+        let n = other.count as f64;
+        self.sum_outer += other.sum_outer
+            + delta * other.sum.transpose()
+            + other.sum * delta.transpose()
+            + delta * delta.transpose() * n;
+        self.sum += other.sum + delta * n;
+        self.count += other.count;
+    }
+
     /// The centroid, `None` when empty.
     pub fn mean(&self) -> Option<Vector3<f64>> {
         (self.count > 0).then(|| self.origin + self.sum / self.count as f64)
@@ -225,6 +245,28 @@ mod tests {
     use super::*;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
+
+    /// The moments of two sets merged are the moments of their union.
+    #[test]
+    fn merged_moments_are_the_union_s() {
+        let a = plane_points(500, Vector3::new(0.1, -0.9, -0.4), 1.2, 0.01);
+        let b = plane_points(300, Vector3::new(0.6, 0.2, -0.7), 2.5, 0.02);
+        let (mut ma, mut mb, mut all) = (Moments::new(), Moments::new(), Moments::new());
+        a.iter().for_each(|p| ma.add(p));
+        b.iter().for_each(|p| mb.add(p));
+        a.iter().chain(&b).for_each(|p| all.add(p));
+        let mut merged = ma;
+        merged.merge(&mb);
+        assert_eq!(merged.count(), all.count());
+        assert!((merged.mean().unwrap() - all.mean().unwrap()).norm() < 1e-12);
+        let diff = merged.covariance().unwrap() - all.covariance().unwrap();
+        assert!(diff.abs().max() < 1e-12, "{diff}");
+        let mut empty = Moments::new();
+        empty.merge(&ma);
+        assert_eq!(empty.mean(), ma.mean());
+        ma.merge(&Moments::new());
+        assert_eq!(empty.covariance(), ma.covariance());
+    }
 
     fn plane_points(n: usize, normal: Vector3<f64>, d: f64, noise: f64) -> Vec<Vector3<f64>> {
         let n0 = normal.normalize();

@@ -1,0 +1,136 @@
+//! Labelling: the taken sample cells relaxed to the nearer plane along
+//! junctions, then every kept pixel given to the nearest plane (within the
+//! threshold) among those that took the sample cells around it.
+
+use nalgebra::Vector3;
+
+use super::sample::cell_neighbourhood;
+use super::{PlaneSegmenter, SegmentedPlane, Threshold, NO_PLANE};
+use crate::cloud::{is_measured, to_vec3, CloudView};
+use crate::plane_fit::{Moments, Plane};
+
+impl PlaneSegmenter {
+    /// Moves each taken cell to a plane of a neighbouring cell (8-connected)
+    /// while its sample point is strictly nearer to that plane and within
+    /// the threshold. Each move brings a point strictly nearer to its
+    /// plane, so it ends; a coplanar piece elsewhere is never adjacent.
+    pub(super) fn relax_cells(&mut self, found: &[Plane], t: Threshold) {
+        let (cw, ch) = (self.sample.coarse_w, self.sample.coarse_h);
+        let neighbours = |c: usize| cell_neighbourhood(c, cw, ch);
+        // Work list: the cells on a border between two planes, then the
+        // neighbours of every cell that moved.
+        self.stack.clear();
+        self.in_work.clear();
+        self.in_work.resize(cw * ch, false);
+        for c in 0..cw * ch {
+            let a = self.cell_plane[c];
+            if a != NO_PLANE
+                && neighbours(c).any(|q| {
+                    let b = self.cell_plane[q];
+                    b != NO_PLANE && b != a
+                })
+            {
+                self.stack.push(c as u32);
+                self.in_work[c] = true;
+            }
+        }
+        while let Some(c) = self.stack.pop() {
+            let c = c as usize;
+            self.in_work[c] = false;
+            let a = self.cell_plane[c];
+            let p = self.sample.cell_point[c];
+            let limit = t.at(&p);
+            let mut best = (found[a as usize].signed_distance(&p).abs(), a);
+            for q in neighbours(c) {
+                let b = self.cell_plane[q];
+                if b == NO_PLANE || b == best.1 {
+                    continue;
+                }
+                let d = found[b as usize].signed_distance(&p).abs();
+                if d < best.0 && d <= limit {
+                    best = (d, b);
+                }
+            }
+            if best.1 != a {
+                self.cell_plane[c] = best.1;
+                for q in neighbours(c) {
+                    if self.cell_plane[q] != NO_PLANE && !self.in_work[q] {
+                        self.in_work[q] = true;
+                        self.stack.push(q as u32);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Gives every kept, measured pixel to the plane nearest to it among
+    /// those that took one of the (up to 3x3) sample points around it, if
+    /// within the threshold; fills `planes[k].inliers` (pixel order) and
+    /// `moments[k]`.
+    pub(super) fn label_pixels(
+        &mut self,
+        cloud: &CloudView<'_>,
+        keep: &[bool],
+        found: &[Plane],
+        t: Threshold,
+    ) {
+        let (w, h) = (cloud.width, cloud.height);
+        let (s, half) = (self.sample.stride, self.sample.stride / 2);
+        let (cw, ch) = (self.sample.coarse_w, self.sample.coarse_h);
+        if found.is_empty() || cw == 0 || ch == 0 {
+            self.planes.clear();
+            self.moments.clear();
+            return;
+        }
+        self.planes.resize_with(found.len(), || SegmentedPlane {
+            plane: found[0],
+            inliers: Vec::new(),
+            centroid: Vector3::zeros(),
+            rms_m: 0.0,
+            moments: Moments::new(),
+        });
+        self.moments.clear();
+        self.moments.resize(found.len(), Moments::new());
+        // Per coarse cell, the distinct planes of the 3x3 cells around it.
+        self.cell_candidates.clear();
+        for c in 0..cw * ch {
+            let mut set = ([NO_PLANE; 9], 0u8);
+            for q in cell_neighbourhood(c, cw, ch) {
+                let k = self.cell_plane[q];
+                if k != NO_PLANE && !set.0[..set.1 as usize].contains(&k) {
+                    set.0[set.1 as usize] = k;
+                    set.1 += 1;
+                }
+            }
+            self.cell_candidates.push(set);
+        }
+        // The sample column of every pixel column (no division per pixel).
+        self.column_cell.clear();
+        self.column_cell
+            .extend((0..w).map(|u| (u.saturating_sub(half) / s).min(cw - 1)));
+        for v in 0..h {
+            let row = (v.saturating_sub(half) / s).min(ch - 1) * cw;
+            for (u, &column) in self.column_cell.iter().enumerate() {
+                let i = v * w + u;
+                let (candidates, n) = &self.cell_candidates[row + column];
+                let n = *n as usize;
+                if n == 0 || !keep[i] || !is_measured(&cloud.points[i]) {
+                    continue;
+                }
+                let p = to_vec3(&cloud.points[i]);
+                let limit = t.at(&p);
+                let mut best: Option<(f64, u16)> = None;
+                for &k in &candidates[..n] {
+                    let d = found[k as usize].signed_distance(&p).abs();
+                    if d <= limit && best.is_none_or(|(bd, _)| d < bd) {
+                        best = Some((d, k));
+                    }
+                }
+                if let Some((_, k)) = best {
+                    self.planes[k as usize].inliers.push(i as u32);
+                    self.moments[k as usize].add(&p);
+                }
+            }
+        }
+    }
+}

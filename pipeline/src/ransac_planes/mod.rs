@@ -1,0 +1,300 @@
+//! Stage 2, RANSAC plane segmentation (paper 2.2 and 3): find the plane with
+//! the most inliers (points within the distance threshold), take its inliers
+//! out, repeat until the rest is smaller than a threshold or the last plane
+//! was too small.
+//!
+//! **Shortcut: planes are found on a grid subsample, pixels labelled once.**
+//! The paper (like PCL's `SACSegmentation` on the filtered cloud) scores
+//! every hypothesis against every point, once per extracted plane. Here the
+//! whole extraction loop runs on a regular subsample of the pixel grid
+//! (every `sample_stride_px`-th pixel in both directions, ~13,500 points of
+//! a Kinect v2 frame at stride 4; the paper itself downsamples before
+//! segmentation); after it, one pass over the full-resolution cloud gives
+//! every pixel to the nearest of the planes that took the sample points
+//! around it (its 3x3 neighbourhood on the sample grid), when within the
+//! threshold, and refits each plane by TLS on all of its pixels. The inlier
+//! count of a plane on a uniform grid subsample is proportional to its full
+//! count, so the largest plane is the same plane, and the final planes are
+//! fitted on every point. Cost: ~13,500 points per extraction instead of
+//! ~200,000, and one full-resolution pass instead of one per plane.
+//!
+//! Within the loop, per plane:
+//!
+//! - *Hypotheses* are scored on a stratified 2,000-point subset of the
+//!   sample, visited in a scrambled order so that the 100-point pretest
+//!   (a hypothesis scoring under half the best rate there is dropped) covers
+//!   the whole image. Every other hypothesis is one sample point and its
+//!   coarse normal (a plane holding a share w of the points is hit with
+//!   probability w, not w^3: five parallel stair risers); the others are
+//!   three points. Each new best is locally optimised (LO-RANSAC: TLS refit
+//!   on its inliers, rescored, while the score grows). At least 64
+//!   hypotheses, more until the adaptive count for `confidence` is reached.
+//! - *Normals gate the inliers* (as PCL's `SACSegmentationFromNormals`):
+//!   each sample point carries a coarse normal: the cross product of the
+//!   central differences two pixels left/right and up/down (the PCA of
+//!   every other pixel of its 5x5 window where one of the four is missing
+//!   or across a depth edge); a three-point
+//!   hypothesis whose points disagree with it, or a sample point more than
+//!   `normal_threshold_deg` off, is not an inlier. A plane that merely
+//!   slices through the edges of a staircase does not win.
+//! - *A plane is one connected surface*: its sample inliers' largest
+//!   8-connected region on the sample grid is refitted alone, and that fit's
+//!   largest region (distance only: the coarse normals of a Kinect v1 wall
+//!   at 5 m are noise) is the plane. Coplanar pieces elsewhere (a floor on
+//!   both sides of a cabinet that hides the link) stay free.
+//! - Too small a region (fewer cells than `min_plane_points` pixels): its
+//!   sample inliers are dropped and the loop tries again, up to 8 times.
+//!
+//! The inlier distance is
+//! `max(distance_threshold_m, distance_threshold_per_m2 * z^2)`: depth
+//! noise and quantisation grow with z^2 (a Kinect v1
+//! quantises 5 m into 7 cm terraces, where a fixed 2 cm threshold picks
+//! single terraces). A pixel within the threshold of two planes goes to the
+//! nearer one: where the normal gate cannot tell two planes apart (a
+//! shallow ramp) the plane found first takes sample cells of the other
+//! along their junction, so before the pixels are labelled each cell moves
+//! to a neighbouring cell's plane while that plane is strictly nearer to
+//! its point (the first-found plane does not keep a strip of its
+//! neighbour).
+//!
+//! One concern per file: `sample.rs` (the sample grid and its coarse
+//! normals), `points.rs` (the `f32` structure of arrays and the inlier
+//! test the inner loops run), `hypotheses.rs` (drawing, scoring, local
+//! optimisation), `regions.rs` (the largest connected region),
+//! `labelling.rs` (cell relaxation and the full-resolution labelling).
+
+use nalgebra::Vector3;
+use rand_chacha::ChaCha8Rng;
+
+use crate::cloud::CloudView;
+use crate::config::RansacConfig;
+use crate::plane_fit::{fit_tls, Moments, Plane};
+
+mod hypotheses;
+mod labelling;
+mod points;
+mod regions;
+mod sample;
+
+use points::{Gate, Points};
+use sample::SampleGrid;
+
+/// One segmented plane.
+#[derive(Debug, Clone)]
+pub struct SegmentedPlane {
+    /// TLS fit of all inliers, normal towards the camera (origin).
+    pub plane: Plane,
+    /// Pixel indices of the inliers, in pixel order.
+    pub inliers: Vec<u32>,
+    /// Mean of the inliers.
+    pub centroid: Vector3<f64>,
+    /// RMS distance of the inliers from `plane`, metres.
+    pub rms_m: f64,
+    /// Moments of the inliers (`plane` is their TLS fit).
+    pub moments: Moments,
+}
+
+/// Reusable buffers of the segmentation.
+#[derive(Debug, Default, Clone)]
+pub struct PlaneSegmenter {
+    /// The sample grid and its free points.
+    sample: SampleGrid,
+    /// The score subset of the current extraction, contiguous.
+    score: Points,
+    /// Free points a hypothesis may be drawn from.
+    pool: Vec<u32>,
+    /// Per free point: inlier of the plane at hand.
+    flags: Vec<bool>,
+    /// Per coarse cell: a component label during region search, and the
+    /// plane that took the cell's sample point (`NO_PLANE` if none).
+    coarse_label: Vec<u32>,
+    cell_plane: Vec<u16>,
+    /// Per coarse cell: the distinct planes of the 3x3 cells around it.
+    cell_candidates: Vec<([u16; 9], u8)>,
+    in_work: Vec<bool>,
+    column_cell: Vec<usize>,
+    stack: Vec<u32>,
+    /// Region search: the inliers' cells, the region being flooded, and
+    /// the largest region so far (after the search: its cells, sorted).
+    seeds: Vec<u32>,
+    flooded: Vec<u32>,
+    region: Vec<u32>,
+    planes: Vec<SegmentedPlane>,
+    moments: Vec<Moments>,
+}
+
+const NO_PLANE: u16 = u16::MAX;
+/// Hypotheses whose largest region is too small before segmentation stops.
+const MAX_FAILURES: usize = 8;
+/// Plane labels are `u16` (`NO_PLANE` excluded).
+pub const MAX_PLANES: usize = NO_PLANE as usize;
+
+impl PlaneSegmenter {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The planes of the last [`Self::segment`] call, in the order they
+    /// were found (largest first, up to the final relabelling).
+    pub fn planes(&self) -> &[SegmentedPlane] {
+        &self.planes
+    }
+
+    /// Segments the points marked in `keep` (one flag per pixel) into planes.
+    pub fn segment(
+        &mut self,
+        cloud: &CloudView<'_>,
+        keep: &[bool],
+        config: &RansacConfig,
+        rng: &mut ChaCha8Rng,
+    ) -> &[SegmentedPlane] {
+        self.planes.clear();
+        let Some(n) = cloud.width.checked_mul(cloud.height) else {
+            return &self.planes;
+        };
+        if cloud.points.len() != n || keep.len() != n || n >= sample::NO_SAMPLE as usize {
+            return &self.planes;
+        }
+        let cos_gate = if config.normal_threshold_deg > 0.0 && config.normal_threshold_deg < 90.0 {
+            Some(config.normal_threshold_deg.to_radians().cos())
+        } else {
+            None
+        };
+        self.sample.load(cloud, keep, config, cos_gate);
+        self.cell_plane.clear();
+        self.cell_plane
+            .resize(self.sample.coarse_w * self.sample.coarse_h, NO_PLANE);
+        let found = self.extract_planes(config, cos_gate.is_some(), rng);
+        self.finish(cloud, keep, config, found)
+    }
+
+    /// The extraction loop on the sample: planes one after another, each
+    /// the largest connected region of the best hypothesis's inliers.
+    fn extract_planes(
+        &mut self,
+        config: &RansacConfig,
+        gated: bool,
+        rng: &mut ChaCha8Rng,
+    ) -> Vec<Plane> {
+        let total = self.sample.points.len();
+        // A plane's sample region must stand for `min_plane_points` pixels.
+        let s2 = (self.sample.stride as f64).powi(2);
+        let min_cells = ((config.min_plane_points as f64 / s2).ceil() as usize).max(3);
+        let mut failures = 0;
+        let mut found: Vec<Plane> = Vec::new();
+        while found.len() < config.max_planes.min(MAX_PLANES)
+            && self.sample.points.len() >= 3
+            && (self.sample.points.len() as f64) >= config.min_remaining_fraction * total as f64
+        {
+            let Some(mut plane) = self.best_hypothesis(config, gated, rng) else {
+                break;
+            };
+            // Refine on the sample: TLS of the inliers, twice.
+            for _ in 0..2 {
+                match fit_tls(&self.sample.points.inlier_moments(&plane)) {
+                    Some(refined) => plane = refined,
+                    None => break,
+                }
+            }
+            // The largest 8-connected region of its sample inliers on the
+            // sample grid, refitted alone (without the pull of other pieces
+            // in the same plane), collects its region once more.
+            let region = self
+                .largest_sample_region(&plane, Gate::Normals)
+                .and_then(|refit| self.largest_sample_region(&refit, Gate::DistanceOnly));
+            let Some(plane_fit) = region.filter(|_| self.region.len() >= min_cells) else {
+                // Too small (or only scattered pieces): these sample points
+                // cannot seed a plane; drop them and try again a few times.
+                failures += 1;
+                if failures > MAX_FAILURES {
+                    break;
+                }
+                self.sample
+                    .points
+                    .inlier_flags(&plane, Gate::Normals, &mut self.flags);
+                self.sample.remove(&self.flags);
+                continue;
+            };
+            // Take the region's cells out of the sample.
+            let label = found.len() as u16;
+            for &c in &self.region {
+                self.cell_plane[c as usize] = label;
+            }
+            self.sample.remove_cells(&self.region);
+            tracing::trace!(
+                plane = found.len(),
+                cells = self.region.len(),
+                normal = ?plane_fit.normal,
+                "ransac plane"
+            );
+            found.push(plane_fit);
+        }
+        found
+    }
+
+    /// A plane found first took the sample cells of its neighbour along
+    /// their junction where the normal gate could not tell them apart (a
+    /// shallow ramp): give each cell to the nearer of the planes around it,
+    /// then every kept pixel to the nearest (within the threshold) of the
+    /// planes that took the sample cells around it, and refit.
+    fn finish(
+        &mut self,
+        cloud: &CloudView<'_>,
+        keep: &[bool],
+        config: &RansacConfig,
+        mut found: Vec<Plane>,
+    ) -> &[SegmentedPlane] {
+        let t = Threshold::of(config);
+        self.relax_cells(&found, t);
+        self.label_pixels(cloud, keep, &found, t);
+        for (k, m) in self.moments.iter().enumerate() {
+            if let Some(fitted) = fit_tls(m) {
+                found[k] = fitted;
+            }
+        }
+        for (k, plane) in self.planes.iter_mut().enumerate() {
+            let m = &self.moments[k];
+            plane.plane = found[k].oriented_towards(&Vector3::zeros());
+            plane.centroid = m.mean().unwrap_or_else(Vector3::zeros);
+            plane.rms_m = rms_distance(m, &plane.plane);
+            plane.moments = *m;
+        }
+        self.planes
+            .retain(|p| p.inliers.len() >= config.min_plane_points.max(3));
+        &self.planes
+    }
+}
+
+/// RMS distance from `plane` of the points summed in `moments` (0 if none).
+fn rms_distance(moments: &Moments, plane: &Plane) -> f64 {
+    moments.covariance().map_or(0.0, |c| {
+        let n = plane.normal;
+        (n.dot(&(c * n))).max(0.0).sqrt()
+    })
+}
+
+/// The inlier distance at a point: `max(base, per_m2 * z^2)`.
+#[derive(Debug, Clone, Copy)]
+pub struct Threshold {
+    base_m: f64,
+    per_m2: f64,
+}
+
+impl Threshold {
+    /// The threshold of `config`.
+    pub fn of(config: &RansacConfig) -> Self {
+        Self {
+            base_m: config.distance_threshold_m,
+            per_m2: config.distance_threshold_per_m2,
+        }
+    }
+
+    /// The inlier distance at point `p`, metres.
+    #[inline]
+    pub fn at(&self, p: &Vector3<f64>) -> f64 {
+        self.base_m.max(self.per_m2 * p.z * p.z)
+    }
+}
+
+#[cfg(test)]
+mod tests;

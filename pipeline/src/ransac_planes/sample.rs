@@ -1,0 +1,145 @@
+//! The sample grid: every `sample_stride_px`-th pixel in both directions,
+//! with its coarse normal; the free points (not yet taken by a plane) as
+//! [`Points`], and per coarse cell its free point and its original point.
+
+use nalgebra::Vector3;
+
+use super::points::Points;
+use super::Threshold;
+use crate::cloud::{is_measured, to_vec3, CloudView};
+use crate::config::RansacConfig;
+use crate::normals::grid_normal;
+
+/// A cell without a free sample point.
+pub(super) const NO_SAMPLE: u32 = u32::MAX;
+
+#[derive(Debug, Default, Clone)]
+pub(super) struct SampleGrid {
+    /// The free sample points; `tag` is the coarse cell.
+    pub points: Points,
+    /// Per coarse cell: the index of its free point in `points`, or
+    /// `NO_SAMPLE`.
+    pub coarse: Vec<u32>,
+    /// Per coarse cell: its sample point (NaN if none), kept after the
+    /// point leaves the free points.
+    pub cell_point: Vec<Vector3<f64>>,
+    pub coarse_w: usize,
+    pub coarse_h: usize,
+    pub stride: usize,
+    /// Scratch for [`Self::remove`].
+    keep: Vec<bool>,
+}
+
+impl SampleGrid {
+    /// Fills the grid from the kept, measured pixels of `cloud`.
+    pub fn load(
+        &mut self,
+        cloud: &CloudView<'_>,
+        keep: &[bool],
+        config: &RansacConfig,
+        cos_gate: Option<f64>,
+    ) {
+        self.points.clear();
+        let t = Threshold::of(config);
+        let s = config.sample_stride_px.max(1);
+        let (w, h) = (cloud.width, cloud.height);
+        self.stride = s;
+        self.coarse_w = w.saturating_sub(s / 2).div_ceil(s);
+        self.coarse_h = h.saturating_sub(s / 2).div_ceil(s);
+        let radius = 2;
+        for (row, v) in (s / 2..h).step_by(s).enumerate() {
+            for (column, u) in (s / 2..w).step_by(s).enumerate() {
+                let i = v * w + u;
+                if !keep[i] || !is_measured(&cloud.points[i]) {
+                    continue;
+                }
+                let n = if cos_gate.is_some() {
+                    central_difference_normal(cloud, keep, u, v, radius)
+                        .or_else(|| grid_normal(cloud, keep, u, v, radius, 2))
+                } else {
+                    None
+                };
+                let p = to_vec3(&cloud.points[i]);
+                let cell = row * self.coarse_w + column;
+                self.points.push(&p, n.as_ref(), &t, cos_gate, cell as u32);
+            }
+        }
+        self.rebuild_cells();
+        self.cell_point.clear();
+        self.cell_point
+            .resize(self.coarse_w * self.coarse_h, Vector3::repeat(f64::NAN));
+        for (&c, p) in self.coarse.iter().zip(&mut self.cell_point) {
+            if c != NO_SAMPLE {
+                *p = self.points.point(c as usize);
+            }
+        }
+    }
+
+    /// Removes the free points whose flag is set and rebuilds the cells.
+    pub fn remove(&mut self, remove: &[bool]) {
+        self.keep.clear();
+        self.keep.extend(remove.iter().map(|&r| !r));
+        self.points.retain(&self.keep);
+        self.rebuild_cells();
+    }
+
+    /// Removes the free points of the given cells.
+    pub fn remove_cells(&mut self, cells: &[u32]) {
+        self.keep.clear();
+        self.keep.resize(self.points.len(), true);
+        for &c in cells {
+            self.keep[self.coarse[c as usize] as usize] = false;
+        }
+        self.points.retain(&self.keep);
+        self.rebuild_cells();
+    }
+
+    /// The coarse cell of free point `j`.
+    #[inline]
+    pub fn cell_of(&self, j: usize) -> usize {
+        self.points.tag[j] as usize
+    }
+
+    fn rebuild_cells(&mut self) {
+        self.coarse.clear();
+        self.coarse.resize(self.coarse_w * self.coarse_h, NO_SAMPLE);
+        for (j, &c) in self.points.tag.iter().enumerate() {
+            self.coarse[c as usize] = j as u32;
+        }
+    }
+}
+
+/// The normal at pixel `(u, v)` from the cross product of the central
+/// differences `r` pixels left/right and up/down, towards the camera; `None`
+/// when one of the four is missing or more than a few pixel spacings away in
+/// 3D (a depth edge: then the PCA window decides).
+pub(super) fn central_difference_normal(
+    cloud: &CloudView<'_>,
+    keep: &[bool],
+    u: usize,
+    v: usize,
+    r: usize,
+) -> Option<Vector3<f64>> {
+    let (w, h) = (cloud.width, cloud.height);
+    if u < r || v < r || u + r >= w || v + r >= h {
+        return None;
+    }
+    let centre = to_vec3(&cloud.points[v * w + u]);
+    let reach = 8.0 * r as f64 * centre.z.abs() / cloud.focal_px();
+    let at = |i: usize| {
+        let p = cloud.points.get(i).filter(|p| keep[i] && is_measured(p))?;
+        let p = to_vec3(p);
+        ((p - centre).norm_squared() <= reach * reach).then_some(p)
+    };
+    let dx = at(v * w + u + r)? - at(v * w + u - r)?;
+    let dy = at((v + r) * w + u)? - at((v - r) * w + u)?;
+    let n = dx.cross(&dy).try_normalize(1e-12)?;
+    Some(if n.dot(&centre) > 0.0 { -n } else { n })
+}
+
+/// Cell `c` and its 8-connected neighbours on a `cw x ch` grid.
+pub(super) fn cell_neighbourhood(c: usize, cw: usize, ch: usize) -> impl Iterator<Item = usize> {
+    let (cu, cv) = (c % cw, c / cw);
+    (cv.saturating_sub(1)..(cv + 2).min(ch))
+        .flat_map(move |r| (cu.saturating_sub(1)..(cu + 2).min(cw)).map(move |q| r * cw + q))
+}
