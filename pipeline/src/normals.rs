@@ -23,6 +23,17 @@
 //! eigen-decomposition in the tests). The table is built in one pass, each
 //! cell written once.
 //!
+//! **Table cells of 2 x 2 pixels.** A table of ten `f64` per pixel is 80
+//! bytes a pixel, 12-17 MB for a floor: building and reading it is bound by
+//! memory bandwidth, not arithmetic. Its cells are blocks of
+//! [`TABLE_CELL_PX`] x [`TABLE_CELL_PX`] pixels (a quarter of the memory),
+//! so a window's edges fall on even pixel offsets from the plane's
+//! bounding box: the window of radius r around a pixel holds the blocks
+//! that its `2r + 1` pixels touch, up to one pixel more on a side, off
+//! centre by at most one pixel. On a plane that moves nothing (a window is
+//! a patch of the same surface either way); the patch radius (below) is
+//! 5-30 pixels. The brute-force k-d tree comparison below holds as before.
+//!
 //! **Patch radius.** K = 100 is a minimum. The smallest eigenvector is the
 //! least-squares plane for *isotropic* noise; a depth camera's noise runs
 //! along the viewing ray, and on a patch of radius r it tilts the
@@ -75,6 +86,9 @@ pub struct NormalStats {
 
 const CHANNELS: usize = 10;
 
+/// Pixels per side of a summed-area table cell (module doc).
+pub const TABLE_CELL_PX: usize = 2;
+
 /// The moments one point adds to a neighbourhood's sums, relative to a
 /// reference point: count, first and second moments
 /// (1, x, y, z, xx, xy, xz, yy, yz, zz).
@@ -98,8 +112,9 @@ fn moments(q: &Vector3<f64>) -> [f64; CHANNELS] {
 #[derive(Debug, Default, Clone)]
 pub struct NormalEstimator {
     table: Vec<[f64; CHANNELS]>,
-    /// Per pixel of the bounding box: whether it is a support point.
-    in_support: Vec<bool>,
+    /// The support's pixels in pixel order, and one row of block sums.
+    order: Vec<u32>,
+    block_row: Vec<[f64; CHANNELS]>,
     normals: Vec<Vector3<f64>>,
     radius: Vec<u16>,
     fallback: Vec<usize>,
@@ -168,7 +183,9 @@ impl NormalEstimator {
         let focal = cloud.focal_px();
         let r0 = start_radius(k);
         let r_max = config.max_window_radius_px.max(r0);
-        let tw = bounds.width + 1;
+        let g = TABLE_CELL_PX;
+        let (bw, bh) = (bounds.width.div_ceil(g), bounds.height.div_ceil(g));
+        let tw = bw + 1;
         for (slot, &pixel) in members.iter().enumerate() {
             let pixel = pixel as usize;
             let Some(p) = cloud.points.get(pixel).filter(|p| is_measured(p)) else {
@@ -196,8 +213,9 @@ impl NormalEstimator {
                 r0
             };
             for r in r_start..=r_max {
-                let (a0, a1) = (u.saturating_sub(r), (u + r + 1).min(bounds.width));
-                let (b0, b1) = (v.saturating_sub(r), (v + r + 1).min(bounds.height));
+                // The table cells the window's pixels touch.
+                let (a0, a1) = (u.saturating_sub(r) / g, ((u + r) / g + 1).min(bw));
+                let (b0, b1) = (v.saturating_sub(r) / g, ((v + r) / g + 1).min(bh));
                 let t = &self.table;
                 let s = |c: usize| {
                     t[b1 * tw + a1][c] - t[b0 * tw + a1][c] - t[b1 * tw + a0][c]
@@ -214,7 +232,7 @@ impl NormalEstimator {
                     self.radius[slot] = (r - r_start) as u16;
                     break;
                 }
-                if a0 == 0 && b0 == 0 && a1 == bounds.width && b1 == bounds.height {
+                if a0 == 0 && b0 == 0 && a1 == bw && b1 == bh {
                     break;
                 }
             }
@@ -270,7 +288,8 @@ impl NormalEstimator {
         (&self.normals, stats)
     }
 
-    /// Summed-area tables of the ten moments over the bounding box.
+    /// Summed-area tables of the ten moments over the bounding box, one
+    /// cell per `TABLE_CELL_PX` x `TABLE_CELL_PX` block of pixels.
     fn build_table(
         &mut self,
         cloud: &CloudView<'_>,
@@ -278,41 +297,53 @@ impl NormalEstimator {
         b: &Bounds,
         c: &Vector3<f64>,
     ) {
-        let tw = b.width + 1;
+        let g = TABLE_CELL_PX;
+        let (bw, bh) = (b.width.div_ceil(g), b.height.div_ceil(g));
+        let tw = bw + 1;
         let w = cloud.width;
-        self.in_support.clear();
-        self.in_support.resize(b.width * b.height, false);
-        for &pixel in members {
-            let pixel = pixel as usize;
-            if cloud.points.get(pixel).is_some_and(is_measured) {
-                self.in_support[(pixel / w - b.v0) * b.width + pixel % w - b.u0] = true;
-            }
+        // The members' moments summed per block, a row of blocks at a
+        // time; members in pixel order (as inliers are) need no sort.
+        self.order.clear();
+        self.order.extend_from_slice(members);
+        if !self.order.is_sorted() {
+            self.order.sort_unstable();
         }
-        // One pass, row by row: each cell is written once (a zeroed table
-        // and a scatter pass would touch the ~17 MB of a full-frame table
-        // three times).
+        self.block_row.clear();
+        self.block_row.resize(bw, [0.0; CHANNELS]);
+        // One pass, row by row: each cell is written once.
         self.table.clear();
-        self.table.reserve(tw * (b.height + 1));
+        self.table.reserve(tw * (bh + 1));
         self.table
             .extend(std::iter::repeat_n([0.0; CHANNELS], tw + 1));
-        for v in 0..b.height {
-            let mut row = [0.0; CHANNELS];
-            for u in 0..b.width {
-                if self.in_support[v * b.width + u] {
-                    let p = &cloud.points[(v + b.v0) * w + u + b.u0];
-                    let m = moments(&(to_vec3(p) - c));
-                    for (r, x) in row.iter_mut().zip(m) {
-                        *r += x;
-                    }
+        let mut next = 0;
+        for bv in 0..bh {
+            self.block_row.fill([0.0; CHANNELS]);
+            let row_end = (b.v0 + (bv + 1) * g) * w;
+            while let Some(&pixel) = self.order.get(next).filter(|&&p| (p as usize) < row_end) {
+                next += 1;
+                let pixel = pixel as usize;
+                let Some(p) = cloud.points.get(pixel).filter(|p| is_measured(p)) else {
+                    continue;
+                };
+                let Some(u) = (pixel % w).checked_sub(b.u0).filter(|&u| u < b.width) else {
+                    continue;
+                };
+                let block = &mut self.block_row[u / g];
+                for (s, x) in block.iter_mut().zip(moments(&(to_vec3(p) - c))) {
+                    *s += x;
                 }
-                let above = &self.table[v * tw + u + 1];
+            }
+            let mut run = [0.0; CHANNELS];
+            for bu in 0..bw {
+                let above = &self.table[bv * tw + bu + 1];
                 let mut cell = [0.0; CHANNELS];
                 for ch in 0..CHANNELS {
-                    cell[ch] = row[ch] + above[ch];
+                    run[ch] += self.block_row[bu][ch];
+                    cell[ch] = run[ch] + above[ch];
                 }
                 self.table.push(cell);
             }
-            if v + 1 < b.height {
+            if bv + 1 < bh {
                 self.table.push([0.0; CHANNELS]);
             }
         }
@@ -611,15 +642,18 @@ mod tests {
             // The wall faces the camera: normal (0, 0, -1) in camera coordinates.
             assert!((n.z + 1.0).abs() < 1e-9, "{n:?}");
         }
-        // Interior only: a pixel whose 11x11 window, cut by the image
-        // border, holds fewer than K = 100 pixels is dropped.
+        // Interior only: a pixel whose radius-5 window (the 2x2 table cells
+        // its 11 x 11 pixels touch), cut by the image border, holds fewer
+        // than K = 100 pixels is dropped.
         let (normals, stats) = est.estimate(
             &cloud.view(),
             &members,
             &NormalsConfig::default(),
             &Vector3::zeros(),
         );
-        let span = |c: usize, len: usize| (c + 6).min(len) - c.saturating_sub(5);
+        let g = TABLE_CELL_PX;
+        let span =
+            |c: usize, len: usize| ((c + 5) / g * g + g).min(len) - c.saturating_sub(5) / g * g;
         let mut border = 0;
         for (slot, n) in normals.iter().enumerate() {
             let (u, v) = (slot % 80, slot / 80);
