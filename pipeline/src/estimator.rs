@@ -514,6 +514,32 @@ fn finish(
     })
 }
 
+/// Merges the sorted `more` into the sorted `into` (segments' inliers are
+/// in pixel order, and so is their union: a merge, not a sort).
+fn merge_sorted(into: &mut Vec<u32>, more: &[u32]) {
+    if into
+        .last()
+        .is_none_or(|&last| more.first().is_none_or(|&f| last < f))
+    {
+        into.extend_from_slice(more);
+        return;
+    }
+    let old = std::mem::take(into);
+    into.reserve(old.len() + more.len());
+    let (mut a, mut b) = (old.as_slice(), more);
+    while let (Some(&x), Some(&y)) = (a.first(), b.first()) {
+        if x <= y {
+            into.push(x);
+            a = &a[1..];
+        } else {
+            into.push(y);
+            b = &b[1..];
+        }
+    }
+    into.extend_from_slice(a);
+    into.extend_from_slice(b);
+}
+
 /// The pixels of a chosen plane (one RANSAC plane, or the ground's
 /// segments together), their centroid and RMS distance from their plane.
 struct PlaneSegment<'a> {
@@ -553,7 +579,7 @@ impl<'a> PlaneSegment<'a> {
         for &k in members {
             let (p, q) = (&planes[k], &summaries[k].quality);
             moments.merge(&p.moments);
-            pixels.extend_from_slice(&p.inliers);
+            merge_sorted(pixels, &p.inliers);
             let n = p.inliers.len() as f64;
             centroid += p.centroid * n;
             rms2 += p.rms_m.powi(2) * n;
@@ -562,7 +588,6 @@ impl<'a> PlaneSegment<'a> {
             quality.area_m2 += q.area_m2;
             quality.border_fraction += q.border_fraction * n;
         }
-        pixels.sort_unstable();
         let n = pixels.len().max(1) as f64;
         quality.rms_m = (rms2 / n).sqrt();
         quality.relative_rms = (relative2 / n).sqrt();
@@ -610,3 +635,21 @@ const _: fn() = || {
     fn assert_send<T: Send>() {}
     assert_send::<Estimator>();
 };
+
+#[cfg(test)]
+mod tests {
+    use super::merge_sorted;
+
+    /// The merge of sorted lists is their sorted union (the oracle: sort).
+    #[test]
+    fn merged_segments_are_in_pixel_order() {
+        let lists: [&[u32]; 4] = [&[5, 9, 40], &[1, 2, 41, 50], &[], &[60, 61]];
+        let mut merged = Vec::new();
+        for list in lists {
+            merge_sorted(&mut merged, list);
+        }
+        let mut sorted: Vec<u32> = lists.concat();
+        sorted.sort_unstable();
+        assert_eq!(merged, sorted);
+    }
+}

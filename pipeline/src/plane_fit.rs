@@ -129,6 +129,59 @@ impl Moments {
     }
 }
 
+/// [`Moments`] for hot loops: sums about a fixed origin given up front, no
+/// checks per point (the caller adds finite points only); symmetric
+/// second moments kept once.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct MomentSums {
+    origin: Vector3<f64>,
+    count: usize,
+    /// x, y, z, xx, xy, xz, yy, yz, zz about `origin`.
+    sums: [f64; 9],
+}
+
+impl MomentSums {
+    /// Empty sums about `origin` (any point near the set: a plane's foot).
+    pub fn about(origin: Vector3<f64>) -> Self {
+        Self {
+            origin,
+            count: 0,
+            sums: [0.0; 9],
+        }
+    }
+
+    /// Adds a finite point.
+    #[inline(always)]
+    pub fn add(&mut self, x: f64, y: f64, z: f64) {
+        let (x, y, z) = (x - self.origin.x, y - self.origin.y, z - self.origin.z);
+        let s = &mut self.sums;
+        self.count += 1;
+        s[0] += x;
+        s[1] += y;
+        s[2] += z;
+        s[3] += x * x;
+        s[4] += x * y;
+        s[5] += x * z;
+        s[6] += y * y;
+        s[7] += y * z;
+        s[8] += z * z;
+    }
+
+    /// The same moments as [`Moments`] (which fits take).
+    pub fn moments(&self) -> Moments {
+        let s = &self.sums;
+        if self.count == 0 {
+            return Moments::new();
+        }
+        Moments {
+            count: self.count,
+            origin: self.origin,
+            sum: Vector3::new(s[0], s[1], s[2]),
+            sum_outer: Matrix3::new(s[3], s[4], s[5], s[4], s[6], s[7], s[5], s[7], s[8]),
+        }
+    }
+}
+
 /// The unit eigenvector of the smallest eigenvalue of a symmetric 3x3 matrix
 /// (nalgebra's symmetric eigen-decomposition) and that eigenvalue; `None`
 /// for a non-finite matrix.
@@ -266,6 +319,24 @@ mod tests {
         assert_eq!(empty.mean(), ma.mean());
         ma.merge(&Moments::new());
         assert_eq!(empty.covariance(), ma.covariance());
+    }
+
+    /// The lean sums give the moments of the checked accumulator.
+    #[test]
+    fn moment_sums_match_moments() {
+        let points = plane_points(400, Vector3::new(0.2, -0.8, -0.5), 1.7, 0.01);
+        let mut checked = Moments::new();
+        let mut lean = MomentSums::about(Vector3::new(0.0, 1.4, 0.9));
+        for p in &points {
+            checked.add(p);
+            lean.add(p.x, p.y, p.z);
+        }
+        let lean = lean.moments();
+        assert_eq!(lean.count(), checked.count());
+        assert!((lean.mean().unwrap() - checked.mean().unwrap()).norm() < 1e-12);
+        let diff = lean.covariance().unwrap() - checked.covariance().unwrap();
+        assert!(diff.abs().max() < 1e-12, "{diff}");
+        assert_eq!(MomentSums::default().moments().count(), 0);
     }
 
     fn plane_points(n: usize, normal: Vector3<f64>, d: f64, noise: f64) -> Vec<Vector3<f64>> {

@@ -7,7 +7,7 @@ use nalgebra::Vector3;
 use super::sample::cell_neighbourhood;
 use super::{PlaneSegmenter, SegmentedPlane, Threshold, NO_PLANE};
 use crate::cloud::{is_measured, to_vec3, CloudView};
-use crate::plane_fit::{Moments, Plane};
+use crate::plane_fit::{MomentSums, Moments, Plane};
 
 impl PlaneSegmenter {
     /// Moves each taken cell to a plane of a neighbouring cell (8-connected)
@@ -89,8 +89,9 @@ impl PlaneSegmenter {
             rms_m: 0.0,
             moments: Moments::new(),
         });
-        self.moments.clear();
-        self.moments.resize(found.len(), Moments::new());
+        self.sums.clear();
+        self.sums
+            .extend(found.iter().map(|p| MomentSums::about(-p.d * p.normal)));
         // Per coarse cell, the distinct planes of the 3x3 cells around it.
         self.cell_candidates.clear();
         for c in 0..cw * ch {
@@ -104,33 +105,46 @@ impl PlaneSegmenter {
             }
             self.cell_candidates.push(set);
         }
-        // The sample column of every pixel column (no division per pixel).
-        self.column_cell.clear();
-        self.column_cell
-            .extend((0..w).map(|u| (u.saturating_sub(half) / s).min(cw - 1)));
+        // Each row is walked a sample cell's columns at a time: pixels
+        // of one run share their candidate planes (none: skipped whole).
+        let run_start = |c: usize| if c == 0 { 0 } else { c * s + half };
         for v in 0..h {
             let row = (v.saturating_sub(half) / s).min(ch - 1) * cw;
-            for (u, &column) in self.column_cell.iter().enumerate() {
-                let i = v * w + u;
-                let (candidates, n) = &self.cell_candidates[row + column];
-                let n = *n as usize;
-                if n == 0 || !keep[i] || !is_measured(&cloud.points[i]) {
+            for column in 0..cw {
+                let (candidates, n) = self.cell_candidates[row + column];
+                if n == 0 {
                     continue;
                 }
-                let p = to_vec3(&cloud.points[i]);
-                let limit = t.at(&p);
-                let mut best: Option<(f64, u16)> = None;
-                for &k in &candidates[..n] {
-                    let d = found[k as usize].signed_distance(&p).abs();
-                    if d <= limit && best.is_none_or(|(bd, _)| d < bd) {
-                        best = Some((d, k));
+                let end = if column + 1 == cw {
+                    w
+                } else {
+                    run_start(column + 1)
+                };
+                let first = v * w + run_start(column);
+                let run = first..v * w + end.min(w);
+                let pixels = keep[run.clone()].iter().zip(&cloud.points[run]);
+                for (i, (&kept, point)) in (first..).zip(pixels) {
+                    if !kept || !is_measured(point) {
+                        continue;
                     }
-                }
-                if let Some((_, k)) = best {
-                    self.planes[k as usize].inliers.push(i as u32);
-                    self.moments[k as usize].add(&p);
+                    let p = to_vec3(point);
+                    let limit = t.at(&p);
+                    let mut best: Option<(f64, u16)> = None;
+                    for &k in &candidates[..n as usize] {
+                        let d = found[k as usize].signed_distance(&p).abs();
+                        if d <= limit && best.is_none_or(|(bd, _)| d < bd) {
+                            best = Some((d, k));
+                        }
+                    }
+                    if let Some((_, k)) = best {
+                        self.planes[k as usize].inliers.push(i as u32);
+                        self.sums[k as usize].add(p.x, p.y, p.z);
+                    }
                 }
             }
         }
+        self.moments.clear();
+        self.moments
+            .extend(self.sums.iter().map(MomentSums::moments));
     }
 }

@@ -68,7 +68,7 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::cloud::CloudView;
 use crate::config::RansacConfig;
-use crate::plane_fit::{fit_tls, Moments, Plane};
+use crate::plane_fit::{fit_tls, MomentSums, Moments, Plane};
 
 mod hypotheses;
 mod labelling;
@@ -112,7 +112,6 @@ pub struct PlaneSegmenter {
     /// Per coarse cell: the distinct planes of the 3x3 cells around it.
     cell_candidates: Vec<([u16; 9], u8)>,
     in_work: Vec<bool>,
-    column_cell: Vec<usize>,
     stack: Vec<u32>,
     /// Region search: the inliers' cells, the region being flooded, and
     /// the largest region so far (after the search: its cells, sorted).
@@ -120,6 +119,7 @@ pub struct PlaneSegmenter {
     flooded: Vec<u32>,
     region: Vec<u32>,
     planes: Vec<SegmentedPlane>,
+    sums: Vec<MomentSums>,
     moments: Vec<Moments>,
 }
 

@@ -12,7 +12,7 @@
 use nalgebra::Vector3;
 
 use super::Threshold;
-use crate::plane_fit::{Moments, Plane};
+use crate::plane_fit::{MomentSums, Moments, Plane};
 
 /// A plane in `f32`: `a x + b y + c z + d`, `(a, b, c)` unit.
 #[derive(Debug, Clone, Copy)]
@@ -230,15 +230,15 @@ impl Points {
     /// Moments of the inliers of `plane` among all points.
     pub fn inlier_moments(&self, plane: &Plane) -> Moments {
         let p = PlaneF32::from(plane);
-        let mut m = Moments::new();
+        let mut m = MomentSums::about(-plane.d * plane.normal);
         for i in 0..self.len() {
             let (x, y, z) = (self.x[i], self.y[i], self.z[i]);
             let (nx, ny, nz) = (self.nx[i], self.ny[i], self.nz[i]);
             if inlier(&p, x, y, z, nx, ny, nz, self.t[i], self.gate[i]) {
-                m.add(&self.point(i));
+                m.add(f64::from(x), f64::from(y), f64::from(z));
             }
         }
-        m
+        m.moments()
     }
 }
 
