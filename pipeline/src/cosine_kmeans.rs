@@ -17,7 +17,9 @@
 //! **How it runs.** The assignment step (each normal to the centre with the
 //! largest dot product) runs on an `f32` structure-of-arrays copy of the
 //! normals, one centre at a time over all normals, which the compiler
-//! vectorises; centres, sums and spreads stay `f64`. Normals of one plane
+//! vectorises; so does the update step (each cluster's sum of its members,
+//! `f32` over blocks of 256, added up in `f64`); centres and spreads stay
+//! `f64`. Normals of one plane
 //! differ from their centres by degrees, dot products by 1e-2 to 1e-4,
 //! against `f32` rounding of 6e-8: a label can change only for a normal
 //! equidistant from two centres to that precision.
@@ -48,7 +50,6 @@ pub struct Clustering {
 pub struct CosineKmeans {
     unit: Vec<Vector3<f64>>,
     labels: Vec<usize>,
-    sums: Vec<Vector3<f64>>,
     /// `f32` copies of `unit`'s coordinates, and per normal the best dot
     /// product and centre of the assignment step.
     ux: Vec<f32>,
@@ -125,21 +126,16 @@ impl CosineKmeans {
         for _ in 0..max_iterations.max(1) {
             iterations += 1;
             let mut changed = 0usize;
-            self.sums.clear();
-            self.sums.resize(k, Vector3::zeros());
-            counts.iter_mut().for_each(|c| *c = 0);
             self.assign(&centres);
-            for ((label, &best), u) in self.labels.iter_mut().zip(&self.best).zip(&self.unit) {
+            for (label, &best) in self.labels.iter_mut().zip(&self.best) {
                 let best = best as usize;
-                if *label != best {
-                    *label = best;
-                    changed += 1;
-                }
-                self.sums[best] += u;
-                counts[best] += 1;
+                changed += usize::from(*label != best);
+                *label = best;
             }
-            for (c, s) in centres.iter_mut().zip(&self.sums) {
-                if let Some(m) = s.try_normalize(1e-12) {
+            for (j, (c, count)) in centres.iter_mut().zip(&mut counts).enumerate() {
+                let (sum, members) = self.cluster_sum(j as u32);
+                *count = members;
+                if let Some(m) = sum.try_normalize(1e-12) {
                     *c = m;
                 }
             }
@@ -232,6 +228,29 @@ impl CosineKmeans {
                 best[i] = if better { j as u32 } else { best[i] };
             }
         }
+    }
+
+    /// Sum and size of cluster `j` after the assignment step: branch-free
+    /// `f32` sums over blocks of 256 normals, added up in `f64`.
+    fn cluster_sum(&self, j: u32) -> (Vector3<f64>, usize) {
+        const BLOCK: usize = 256;
+        let mut total = Vector3::zeros();
+        let mut count = 0usize;
+        for start in (0..self.best.len()).step_by(BLOCK) {
+            let end = (start + BLOCK).min(self.best.len());
+            let (mut sx, mut sy, mut sz, mut n) = (0f32, 0f32, 0f32, 0u32);
+            for i in start..end {
+                let member = u32::from(self.best[i] == j);
+                let m = member as f32;
+                sx += m * self.ux[i];
+                sy += m * self.uy[i];
+                sz += m * self.uz[i];
+                n += member;
+            }
+            total += Vector3::new(f64::from(sx), f64::from(sy), f64::from(sz));
+            count += n as usize;
+        }
+        (total, count)
     }
 
     fn argmin_distance(&self, target: &Vector3<f64>) -> usize {

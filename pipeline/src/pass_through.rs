@@ -39,7 +39,6 @@ pub struct PassThroughRange {
 /// Reusable buffers of the filter.
 #[derive(Debug, Default, Clone)]
 pub struct PassThrough {
-    keyed: Vec<(f32, u32)>,
     kept: Vec<u32>,
 }
 
@@ -59,27 +58,27 @@ impl PassThrough {
         members: &[u32],
         max_points: usize,
     ) -> (&[u32], PassThroughRange) {
-        self.keyed.clear();
-        for &i in members {
-            if let Some(p) = points.get(i as usize) {
-                if p.z_m.is_finite() && p.x_m.is_finite() && p.y_m.is_finite() && p.z_m != 0.0 {
-                    self.keyed.push((p.y_m / p.z_m, i));
-                }
-            }
+        self.kept.clear();
+        self.kept.extend(members.iter().copied().filter(|&i| {
+            points.get(i as usize).is_some_and(|p| {
+                p.z_m.is_finite() && p.x_m.is_finite() && p.y_m.is_finite() && p.z_m != 0.0
+            })
+        }));
+        if !self.kept.is_sorted() {
+            self.kept.sort_unstable();
+            self.kept.dedup();
         }
-        let cut = self.keyed.len() > max_points;
+        let cut = self.kept.len() > max_points;
         if cut {
-            surface_sample(points, &mut self.keyed, max_points);
+            surface_sample(points, &mut self.kept, max_points);
         }
         let (mut lo, mut hi) = (f64::NAN, f64::NAN);
-        for &(z, _) in &self.keyed {
-            let z = f64::from(z);
-            lo = if lo.is_nan() { z } else { lo.min(z) };
-            hi = if hi.is_nan() { z } else { hi.max(z) };
+        for &i in &self.kept {
+            let p = &points[i as usize];
+            let e = f64::from(p.y_m / p.z_m);
+            lo = if lo.is_nan() { e } else { lo.min(e) };
+            hi = if hi.is_nan() { e } else { hi.max(e) };
         }
-        self.kept.clear();
-        self.kept.extend(self.keyed.iter().map(|&(_, i)| i));
-        self.kept.sort_unstable();
         (
             &self.kept,
             PassThroughRange {
@@ -91,8 +90,8 @@ impl PassThrough {
     }
 }
 
-/// Keeps at most `max_points` of `keyed` (elevation, pixel), each with a
-/// probability proportional to its pixel's footprint on the plane.
+/// Keeps at most `max_points` of `kept` (pixels in pixel order), each with
+/// a probability proportional to its pixel's footprint on the plane.
 ///
 /// A pixel sees the solid angle `cos^3(a) / f^2` (a: off the optical axis,
 /// `cos a = z / r`); on a plane `n . p + d = 0` at range `r` that is the
@@ -101,28 +100,27 @@ impl PassThrough {
 /// Systematic sampling: walking the points in pixel order, a point is kept
 /// when the running sum of footprints crosses the next multiple of
 /// `total / max_points` (once, even if it crosses several).
-fn surface_sample(points: &[CloudPoint], keyed: &mut Vec<(f32, u32)>, max_points: usize) {
-    keyed.sort_unstable_by_key(|&(_, i)| i);
+fn surface_sample(points: &[CloudPoint], kept: &mut Vec<u32>, max_points: usize) {
     let footprint = |i: u32| {
         let z = f64::from(points[i as usize].z_m).abs();
         z * z * z
     };
-    let total: f64 = keyed.iter().map(|&(_, i)| footprint(i)).sum();
+    let total: f64 = kept.iter().map(|&i| footprint(i)).sum();
     if max_points == 0 || !(total.is_finite() && total > 0.0) {
-        keyed.truncate(max_points);
+        kept.truncate(max_points);
         return;
     }
     let step = total / max_points as f64;
     let (mut sum, mut next, mut out) = (0.0, 0.5 * step, 0);
-    for k in 0..keyed.len() {
-        sum += footprint(keyed[k].1);
+    for k in 0..kept.len() {
+        sum += footprint(kept[k]);
         if sum >= next && out < max_points {
-            keyed[out] = keyed[k];
+            kept[out] = kept[k];
             out += 1;
             next += step * ((sum - next) / step).floor().max(0.0) + step;
         }
     }
-    keyed.truncate(out);
+    kept.truncate(out);
 }
 
 #[cfg(test)]
