@@ -82,6 +82,9 @@ impl PlaneSegmenter {
             self.moments.clear();
             return;
         }
+        // The last frame's inlier lists are reused (no reallocation).
+        self.planes.truncate(found.len());
+        self.planes.iter_mut().for_each(|p| p.inliers.clear());
         self.planes.resize_with(found.len(), || SegmentedPlane {
             plane: found[0],
             inliers: Vec::new(),
@@ -108,6 +111,7 @@ impl PlaneSegmenter {
         // Each row is walked a sample cell's columns at a time: pixels
         // of one run share their candidate planes (none: skipped whole).
         let run_start = |c: usize| if c == 0 { 0 } else { c * s + half };
+        let (planes, sums) = (&mut self.planes, &mut self.sums);
         for v in 0..h {
             let row = (v.saturating_sub(half) / s).min(ch - 1) * cw;
             for column in 0..cw {
@@ -137,8 +141,8 @@ impl PlaneSegmenter {
                         }
                     }
                     if let Some((_, k)) = best {
-                        self.planes[k as usize].inliers.push(i as u32);
-                        self.sums[k as usize].add(p.x, p.y, p.z);
+                        planes[k as usize].inliers.push(i as u32);
+                        sums[k as usize].add(p.x, p.y, p.z);
                     }
                 }
             }

@@ -148,11 +148,12 @@ impl PlaneSegmenter {
         config: &RansacConfig,
         rng: &mut ChaCha8Rng,
     ) -> &[SegmentedPlane] {
-        self.planes.clear();
         let Some(n) = cloud.width.checked_mul(cloud.height) else {
+            self.planes.clear();
             return &self.planes;
         };
         if cloud.points.len() != n || keep.len() != n || n >= sample::NO_SAMPLE as usize {
+            self.planes.clear();
             return &self.planes;
         }
         let cos_gate = if config.normal_threshold_deg > 0.0 && config.normal_threshold_deg < 90.0 {
