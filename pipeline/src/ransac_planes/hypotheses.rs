@@ -45,7 +45,7 @@ impl PlaneSegmenter {
         if self.pool.len() < 3 {
             return None;
         }
-        fill_score_subset(sample, &mut self.score);
+        fill_score_subset(sample, &mut self.score, &mut self.indices);
         let score = &self.score;
         let mut best: Option<(usize, Plane)> = None;
         let mut needed = config.max_iterations;
@@ -123,19 +123,17 @@ fn draw(sample: &Points, pool: &[u32], from_normal: bool, rng: &mut ChaCha8Rng) 
 /// (n / SCORE_POINTS)-th point in raster order, so each image region is
 /// scored in proportion, copied in a scrambled order (a stride coprime with
 /// SCORE_POINTS) so that the pretest prefix is spread over the whole image.
-fn fill_score_subset(sample: &Points, score: &mut Points) {
+fn fill_score_subset(sample: &Points, score: &mut Points, indices: &mut Vec<u32>) {
     let n = sample.len();
-    score.clear();
+    indices.clear();
     if n <= SCORE_POINTS {
-        for j in 0..n {
-            score.push_from(sample, j, j as u32);
-        }
+        indices.extend(0..n as u32);
     } else {
-        for k in 0..SCORE_POINTS {
-            let j = (k * SCRAMBLE) % SCORE_POINTS * n / SCORE_POINTS;
-            score.push_from(sample, j, j as u32);
-        }
+        indices.extend(
+            (0..SCORE_POINTS).map(|k| ((k * SCRAMBLE) % SCORE_POINTS * n / SCORE_POINTS) as u32),
+        );
     }
+    score.gather(sample, indices);
 }
 
 /// Refits `plane` by TLS on its inliers among `score` and rescores it,

@@ -103,6 +103,8 @@ pub struct PlaneSegmenter {
     score: Points,
     /// Free points a hypothesis may be drawn from.
     pool: Vec<u32>,
+    /// The score subset's indices into the free points.
+    indices: Vec<u32>,
     /// Per free point: inlier of the plane at hand.
     flags: Vec<bool>,
     /// Per coarse cell: a component label during region search, and the

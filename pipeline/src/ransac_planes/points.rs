@@ -106,47 +106,45 @@ impl Points {
         self.tag.push(tag);
     }
 
-    /// Appends point `j` of `other` with tag `tag`.
-    pub fn push_from(&mut self, other: &Points, j: usize, tag: u32) {
-        self.x.push(other.x[j]);
-        self.y.push(other.y[j]);
-        self.z.push(other.z[j]);
-        self.nx.push(other.nx[j]);
-        self.ny.push(other.ny[j]);
-        self.nz.push(other.nz[j]);
-        self.t.push(other.t[j]);
-        self.gate.push(other.gate[j]);
-        self.tag.push(tag);
+    /// Replaces the points by `other`'s points `indices` (in that order),
+    /// each tagged with its index in `other`.
+    pub fn gather(&mut self, other: &Points, indices: &[u32]) {
+        fn take<T: Copy>(to: &mut Vec<T>, from: &[T], indices: &[u32]) {
+            to.clear();
+            to.extend(indices.iter().map(|&j| from[j as usize]));
+        }
+        take(&mut self.x, &other.x, indices);
+        take(&mut self.y, &other.y, indices);
+        take(&mut self.z, &other.z, indices);
+        take(&mut self.nx, &other.nx, indices);
+        take(&mut self.ny, &other.ny, indices);
+        take(&mut self.nz, &other.nz, indices);
+        take(&mut self.t, &other.t, indices);
+        take(&mut self.gate, &other.gate, indices);
+        self.tag.clear();
+        self.tag.extend_from_slice(indices);
     }
 
-    /// Keeps the points whose `keep` flag is set, in order.
-    pub fn retain(&mut self, keep: &[bool]) {
-        let mut k = 0;
-        for (j, _) in keep.iter().enumerate().filter(|(_, &kept)| kept) {
-            self.x[k] = self.x[j];
-            self.y[k] = self.y[j];
-            self.z[k] = self.z[j];
-            self.nx[k] = self.nx[j];
-            self.ny[k] = self.ny[j];
-            self.nz[k] = self.nz[j];
-            self.t[k] = self.t[j];
-            self.gate[k] = self.gate[j];
-            self.tag[k] = self.tag[j];
-            k += 1;
+    /// Keeps the points `indices` (increasing), in order.
+    pub fn retain(&mut self, indices: &[u32]) {
+        fn keep<T: Copy>(v: &mut Vec<T>, indices: &[u32]) {
+            // indices[k] >= k: a forward copy in place never overwrites a
+            // point still to be read.
+            for (k, &j) in indices.iter().enumerate() {
+                v[k] = v[j as usize];
+            }
+            v.truncate(indices.len());
         }
-        for v in [
-            &mut self.x,
-            &mut self.y,
-            &mut self.z,
-            &mut self.nx,
-            &mut self.ny,
-            &mut self.nz,
-            &mut self.t,
-            &mut self.gate,
-        ] {
-            v.truncate(k);
-        }
-        self.tag.truncate(k);
+        debug_assert!(indices.is_sorted());
+        keep(&mut self.x, indices);
+        keep(&mut self.y, indices);
+        keep(&mut self.z, indices);
+        keep(&mut self.nx, indices);
+        keep(&mut self.ny, indices);
+        keep(&mut self.nz, indices);
+        keep(&mut self.t, indices);
+        keep(&mut self.gate, indices);
+        keep(&mut self.tag, indices);
     }
 
     pub fn point(&self, j: usize) -> Vector3<f64> {
@@ -211,20 +209,15 @@ impl Points {
     pub fn inlier_flags(&self, plane: &Plane, gate: Gate, flags: &mut Vec<bool>) {
         let p = PlaneF32::from(plane);
         let on = if gate == Gate::Normals { 1.0 } else { 0.0 };
+        let n = self.len();
         flags.clear();
-        flags.extend((0..self.len()).map(|i| {
-            inlier(
-                &p,
-                self.x[i],
-                self.y[i],
-                self.z[i],
-                self.nx[i],
-                self.ny[i],
-                self.nz[i],
-                self.t[i],
-                self.gate[i] * on,
-            )
-        }));
+        flags.resize(n, false);
+        let (x, y, z) = (&self.x[..n], &self.y[..n], &self.z[..n]);
+        let (nx, ny, nz) = (&self.nx[..n], &self.ny[..n], &self.nz[..n]);
+        let (t, g) = (&self.t[..n], &self.gate[..n]);
+        for (i, flag) in flags.iter_mut().enumerate() {
+            *flag = inlier(&p, x[i], y[i], z[i], nx[i], ny[i], nz[i], t[i], g[i] * on);
+        }
     }
 
     /// Moments of the inliers of `plane` among all points.

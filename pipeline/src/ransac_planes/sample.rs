@@ -26,8 +26,8 @@ pub(super) struct SampleGrid {
     pub coarse_w: usize,
     pub coarse_h: usize,
     pub stride: usize,
-    /// Scratch for [`Self::remove`].
-    keep: Vec<bool>,
+    /// Scratch for [`Self::remove`]: the free points kept.
+    keep: Vec<u32>,
 }
 
 impl SampleGrid {
@@ -78,18 +78,22 @@ impl SampleGrid {
     /// Removes the free points whose flag is set and rebuilds the cells.
     pub fn remove(&mut self, remove: &[bool]) {
         self.keep.clear();
-        self.keep.extend(remove.iter().map(|&r| !r));
+        self.keep
+            .extend((0..remove.len() as u32).filter(|&j| !remove[j as usize]));
         self.points.retain(&self.keep);
         self.rebuild_cells();
     }
 
     /// Removes the free points of the given cells.
     pub fn remove_cells(&mut self, cells: &[u32]) {
-        self.keep.clear();
-        self.keep.resize(self.points.len(), true);
         for &c in cells {
-            self.keep[self.coarse[c as usize] as usize] = false;
+            self.coarse[c as usize] = NO_SAMPLE;
         }
+        // The cells still holding a free point, in raster order, are the
+        // points kept.
+        self.keep.clear();
+        self.keep
+            .extend(self.coarse.iter().copied().filter(|&j| j != NO_SAMPLE));
         self.points.retain(&self.keep);
         self.rebuild_cells();
     }
