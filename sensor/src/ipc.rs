@@ -295,14 +295,16 @@ impl CloudPublisher {
             source: self.info.source as u32,
             has_color: u32::from(color.is_some()),
         };
-        let projector = &self.projector;
-        let sample = match color {
-            Some(color) => sample.write_from_fn(|i| {
-                let [r, g, b] = color.data[i];
-                projector.point(i, depth.data[i], CloudPoint::pack_rgb(r, g, b))
-            }),
-            None => sample.write_from_fn(|i| projector.point(i, depth.data[i], 0)),
-        };
+        // Row by row straight into the sample: a third of the time of a
+        // per-pixel `write_from_fn` (which divides each index into a row and
+        // a column), benches/projection.rs.
+        let color = color.map(|c| c.data.as_slice());
+        self.projector
+            .project_into(&depth.data, color, sample.payload_mut());
+        // SAFETY: `project_into` sets every element of the slice it is given,
+        // whatever the lengths (its documented contract, tested in
+        // projection.rs), so the whole payload is initialised.
+        let sample = unsafe { sample.assume_init() };
         sample
             .send()
             .map_err(|e| IpcError::new("send a sample", &self.name, e))?;
