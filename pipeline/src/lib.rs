@@ -8,7 +8,7 @@
 //! | file | stage |
 //! |---|---|
 //! | `statistical_outlier.rs` | 1. statistical outlier removal (m = 20, alpha = 2) |
-//! | `ransac_planes.rs` | 2. RANSAC plane segmentation |
+//! | `ransac_planes/` | 2. RANSAC plane segmentation (sample grid, f32 inlier test, hypotheses, regions, labelling) |
 //! | `pass_through.rs` | 3. pass-through filter (at most 10,000 points a plane) |
 //! | `normals.rs` | 4. PCA normals over K = 100 neighbours |
 //! | `cosine_kmeans.rs` | 5. cosine k-means, dominant cluster |
