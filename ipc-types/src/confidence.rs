@@ -1,10 +1,13 @@
 //! Why an estimate's confidence is low: bits of `SlopeEstimate`'s
 //! `confidence_reasons`, one per reason (several may be set).
 
+use std::borrow::Cow;
+
 /// A chosen plane has few pixels (under 3000 for the inclined plane).
 pub const FEW_POINTS: u32 = 1 << 0;
 /// A chosen plane is rough: its inliers fill much of the RANSAC threshold
-/// band (relative RMS above 0.3).
+/// band (relative RMS above 0.3), or the inclined plane is rougher than the
+/// sensor's noise explains (more than 2.5 standard deviations RMS).
 pub const ROUGH_PLANE: u32 = 1 << 1;
 /// The inclined plane covers little surface (under 0.05 square metres).
 pub const SMALL_AREA: u32 = 1 << 2;
@@ -25,11 +28,18 @@ pub const ALL: [(u32, &str); 6] = [
     (METHODS_DISAGREE, "methods_disagree"),
 ];
 
-/// The names of the reasons set in `bits`, in bit order.
-pub fn names(bits: u32) -> impl Iterator<Item = &'static str> {
-    ALL.into_iter()
+/// The names of the reasons set in `bits`, in bit order; a bit this build
+/// does not know (set by a newer estimator) is named `bit_N`, never dropped.
+pub fn names(bits: u32) -> impl Iterator<Item = Cow<'static, str>> {
+    let known = ALL.iter().fold(0, |acc, (bit, _)| acc | bit);
+    let named = ALL
+        .into_iter()
         .filter(move |(bit, _)| bits & bit != 0)
-        .map(|(_, name)| name)
+        .map(|(_, name)| Cow::Borrowed(name));
+    let unknown = (0..u32::BITS)
+        .filter(move |n| (bits & !known) & (1 << n) != 0)
+        .map(|n| Cow::Owned(format!("bit_{n}")));
+    named.chain(unknown)
 }
 
 #[cfg(test)]
@@ -46,5 +56,7 @@ mod tests {
         let names: Vec<_> = names(FEW_POINTS | GROUND_FROM_MOUNT).collect();
         assert_eq!(names, ["few_points", "ground_from_mount"]);
         assert_eq!(super::names(0).count(), 0);
+        let names: Vec<_> = super::names(ROUGH_PLANE | 1 << 9 | 1 << 31).collect();
+        assert_eq!(names, ["rough_plane", "bit_9", "bit_31"]);
     }
 }

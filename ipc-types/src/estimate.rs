@@ -176,8 +176,8 @@ impl SlopeEstimate {
     }
 
     /// The names of the bits set in `confidence_reasons`, in bit order
-    /// (bits this build does not know are left out).
-    pub fn confidence_reason_names(&self) -> impl Iterator<Item = &'static str> {
+    /// (a bit this build does not know is named `bit_N`).
+    pub fn confidence_reason_names(&self) -> impl Iterator<Item = std::borrow::Cow<'static, str>> {
         crate::confidence::names(self.confidence_reasons)
     }
 
@@ -351,14 +351,14 @@ mod tests {
     }
 
     #[test]
-    fn confidence_reasons_are_named_in_bit_order() {
+    fn confidence_reasons_are_named_in_bit_order_unknown_bits_too() {
         let e = SlopeEstimate {
             confidence: 0.4,
             confidence_reasons: confidence::SMALL_AREA | confidence::FEW_POINTS | 1 << 31,
             ..Default::default()
         };
         let names: Vec<_> = e.confidence_reason_names().collect();
-        assert_eq!(names, ["few_points", "small_area"]);
+        assert_eq!(names, ["few_points", "small_area", "bit_31"]);
     }
 
     #[test]

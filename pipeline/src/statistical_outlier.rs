@@ -31,7 +31,7 @@
 //! neighbour: those take the fallback. The fallback computes the 80 squared
 //! distances of the 9x9 window (a missing one as infinity) and selects the
 //! 20 smallest without branches: two sorting-network rounds over four
-//! 20-value lanes (see [`sum_sqrt_smallest20`]); only the 20 selected are
+//! 20-value lanes (see `sum_sqrt_smallest20`); only the 20 selected are
 //! square-rooted. With fewer than 20 finite candidates an infinity is among
 //! them and the statistic is infinite (isolated). Real Kinect frames send
 //! 3-10 % of their points to the fallback. The statistics are summed in f64

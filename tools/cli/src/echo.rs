@@ -77,7 +77,7 @@ pub struct EstimateJson {
     pub ground_from_mount: bool,
     pub processing_ms: f64,
     pub confidence: f64,
-    pub confidence_reasons: Vec<&'static str>,
+    pub confidence_reasons: Vec<std::borrow::Cow<'static, str>>,
     pub tracked_slope_deg: Option<f64>,
     pub tracked_std_deg: Option<f64>,
     pub tracked_frames: u32,
@@ -169,7 +169,7 @@ pub fn spread_text(std_deg: f64) -> String {
 /// confidence is below 1.
 fn confidence_text(e: &SlopeEstimate) -> String {
     let text = format!("confidence {:4.2}", e.confidence);
-    let reasons: Vec<&str> = e.confidence_reason_names().collect();
+    let reasons: Vec<_> = e.confidence_reason_names().collect();
     if e.confidence < 1.0 && !reasons.is_empty() {
         format!("{text} ({})", reasons.join(", "))
     } else {

@@ -223,7 +223,7 @@ pub struct FrameDetails {
     /// How far to trust `slope_deg`, 0..=1 (0 unless `ok`).
     pub confidence: Option<f64>,
     /// Why the confidence is below 1, by name.
-    pub confidence_reasons: Option<Vec<&'static str>>,
+    pub confidence_reasons: Option<Vec<std::borrow::Cow<'static, str>>>,
     /// True when the ground normal is the mount's up vector.
     pub ground_from_mount: Option<bool>,
     /// The slope tracked over the recording's frames so far.
@@ -983,7 +983,7 @@ mod tests {
         assert_eq!(d.inclined_rms_m, Some(inclined.rms_m));
         assert_eq!(d.ground_area_m2, Some(ground.area_m2));
         assert_eq!(d.confidence, Some(0.3));
-        assert_eq!(d.confidence_reasons, Some(vec!["small_area"]));
+        assert_eq!(d.confidence_reasons, Some(vec!["small_area".into()]));
         assert_eq!(d.ground_from_mount, Some(false));
         let tracked = d.tracked.as_ref().unwrap();
         assert_eq!((tracked.slope_deg, tracked.frames), (None, 0));

@@ -107,7 +107,7 @@ pub struct RecordArgs {
     #[arg(long, value_parser = positive_f64)]
     pub idle_timeout_s: Option<f64>,
 
-    /// The camera's pose for recording.toml's [mount] (topic: overrides
+    /// The camera's pose for recording.toml's `[mount]` (topic: overrides
     /// the header's).
     #[command(flatten)]
     pub mount: MountArgs,
