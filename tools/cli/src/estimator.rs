@@ -32,6 +32,7 @@ Stops cleanly on SIGINT or SIGTERM.",
   slope-estimator                              # the paper's method, default parameters
   slope-estimator --method tls                 # total-least-squares baseline
   slope-estimator --config estimator.toml      # parameters from a TOML file
+  slope-estimator --config estimator.toml --print-config   # every parameter in effect, then exit
   slope-estimator --service-prefix robot2 -v   # another stack, debug logs"
 )]
 pub struct EstimatorArgs {
@@ -48,6 +49,12 @@ pub struct EstimatorArgs {
     /// Stop after publishing this many estimates.
     #[arg(long)]
     pub max_frames: Option<u64>,
+
+    /// Print every parameter in effect (the config file's, the defaults for
+    /// keys it leaves out, and --method) as TOML and exit, without
+    /// connecting to anything: what the daemon would run with.
+    #[arg(long)]
+    pub print_config: bool,
 
     #[command(flatten)]
     pub common: CommonArgs,
@@ -89,8 +96,17 @@ pub struct EstimatorStats {
 /// How often the estimator logs its throughput (the journal's view of it).
 pub const SUMMARY_INTERVAL: std::time::Duration = std::time::Duration::from_secs(10);
 
+/// The configuration as TOML, every key (a config file for the estimator).
+pub fn config_toml(config: &EstimatorConfig) -> anyhow::Result<String> {
+    toml::to_string(config).context("cannot write the configuration as TOML")
+}
+
 pub fn run(args: &EstimatorArgs, stop: &StopFlag) -> anyhow::Result<EstimatorStats> {
     let config = load_config(args.config.as_ref(), args.method)?;
+    if args.print_config {
+        print!("{}", config_toml(&config)?);
+        return Ok(EstimatorStats::default());
+    }
     let names = args.common.service_names();
     let node = create_node(&node_name("slope-estimator"))?;
     let subscriber = CloudSubscriber::create(&node, &names)?;

@@ -109,3 +109,40 @@ fn user_errors_are_printed_once_without_a_backtrace() {
         }
     }
 }
+
+/// `--print-config` prints the parameters in effect (file, defaults for the
+/// keys it leaves out, --method), which parse back to the same
+/// configuration; a bad file is refused naming the key.
+#[test]
+fn the_estimator_prints_the_configuration_in_effect() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let file = dir.path().join("estimator.toml");
+    std::fs::write(&file, "seed = 7\n[ransac]\nmax_planes = 12\n").expect("write");
+    let bin = env!("CARGO_BIN_EXE_slope-estimator");
+    let path = file.to_str().expect("utf-8 path");
+    let (ok, stdout, stderr) = run(
+        bin,
+        &["--config", path, "--method", "tls", "--print-config"],
+    );
+    assert!(ok, "{stderr}");
+    let printed = slope_pipeline::EstimatorConfig::from_toml_str(&stdout)
+        .unwrap_or_else(|e| panic!("{e}\n{stdout}"));
+    let expected = slope_pipeline::EstimatorConfig {
+        seed: 7,
+        method: slope_ipc_types::SlopeMethod::Tls,
+        ransac: slope_pipeline::RansacConfig {
+            max_planes: 12,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    assert_eq!(printed, expected);
+    assert!(
+        stdout.contains("[normals]"),
+        "every section is printed:\n{stdout}"
+    );
+    std::fs::write(&file, "[ransac]\nmax_planez = 12\n").expect("write");
+    let (ok, _, stderr) = run(bin, &["--config", path, "--print-config"]);
+    assert!(!ok);
+    assert!(stderr.contains("max_planez"), "{stderr}");
+}
