@@ -318,19 +318,37 @@ impl NormalEstimator {
         let mut next = 0;
         for bv in 0..bh {
             self.block_row.fill([0.0; CHANNELS]);
-            let row_end = (b.v0 + (bv + 1) * g) * w;
-            while let Some(&pixel) = self.order.get(next).filter(|&&p| (p as usize) < row_end) {
-                next += 1;
-                let pixel = pixel as usize;
-                let Some(p) = cloud.points.get(pixel).filter(|p| is_measured(p)) else {
-                    continue;
-                };
-                let Some(u) = (pixel % w).checked_sub(b.u0).filter(|&u| u < b.width) else {
-                    continue;
-                };
-                let block = &mut self.block_row[u / g];
-                for (s, x) in block.iter_mut().zip(moments(&(to_vec3(p) - c))) {
-                    *s += x;
+            // The pixel rows of this row of blocks, walked without a
+            // division per pixel; a block's sum is kept in registers while
+            // consecutive pixels fall into it.
+            for v in b.v0 + bv * g..(b.v0 + (bv + 1) * g).min(b.v0 + b.height) {
+                let row_start = v * w;
+                let mut current: Option<(usize, [f64; CHANNELS])> = None;
+                while let Some(&pixel) = self
+                    .order
+                    .get(next)
+                    .filter(|&&p| (p as usize) < row_start + w)
+                {
+                    next += 1;
+                    let pixel = pixel as usize;
+                    let (Some(u), Some(p)) = (
+                        pixel.checked_sub(row_start + b.u0).filter(|&u| u < b.width),
+                        cloud.points.get(pixel).filter(|p| is_measured(p)),
+                    ) else {
+                        continue;
+                    };
+                    let block = u / g;
+                    if let Some((at, sums)) = current.filter(|(at, _)| *at != block) {
+                        add_into(&mut self.block_row[at], &sums);
+                        current = None;
+                    }
+                    let sums = &mut current.get_or_insert((block, [0.0; CHANNELS])).1;
+                    for (s, x) in sums.iter_mut().zip(moments(&(to_vec3(p) - c))) {
+                        *s += x;
+                    }
+                }
+                if let Some((at, sums)) = current {
+                    add_into(&mut self.block_row[at], &sums);
                 }
             }
             let mut run = [0.0; CHANNELS];
@@ -401,6 +419,14 @@ impl NormalEstimator {
             }
         }
         undefined
+    }
+}
+
+/// `into += from`, channel by channel.
+#[inline]
+fn add_into(into: &mut [f64; CHANNELS], from: &[f64; CHANNELS]) {
+    for (a, b) in into.iter_mut().zip(from) {
+        *a += b;
     }
 }
 
