@@ -255,19 +255,26 @@ impl CosineKmeans {
             let end = (start + BLOCK).min(self.best.len());
             let (mut sx, mut sy, mut sz) = ([0f32; LANES], [0f32; LANES], [0f32; LANES]);
             let mut n = [0u32; LANES];
-            let best = self.best[start..end].chunks(LANES);
-            let xs = self.ux[start..end].chunks(LANES);
-            let ys = self.uy[start..end].chunks(LANES);
-            let zs = self.uz[start..end].chunks(LANES);
+            let mut add = |l: usize, b: u32, x: f32, y: f32, z: f32| {
+                let member = u32::from(b == j);
+                let m = member as f32;
+                sx[l] += m * x;
+                sy[l] += m * y;
+                sz[l] += m * z;
+                n[l] += member;
+            };
+            let best = self.best[start..end].chunks_exact(LANES);
+            let xs = self.ux[start..end].chunks_exact(LANES);
+            let ys = self.uy[start..end].chunks_exact(LANES);
+            let zs = self.uz[start..end].chunks_exact(LANES);
+            let tail = start + best.len() * LANES;
             for (((b, x), y), z) in best.zip(xs).zip(ys).zip(zs) {
-                for l in 0..b.len() {
-                    let member = u32::from(b[l] == j);
-                    let m = member as f32;
-                    sx[l] += m * x[l];
-                    sy[l] += m * y[l];
-                    sz[l] += m * z[l];
-                    n[l] += member;
+                for l in 0..LANES {
+                    add(l, b[l], x[l], y[l], z[l]);
                 }
+            }
+            for i in tail..end {
+                add(i - tail, self.best[i], self.ux[i], self.uy[i], self.uz[i]);
             }
             let sum = |s: [f32; LANES]| s.iter().map(|&v| f64::from(v)).sum::<f64>();
             total += Vector3::new(sum(sx), sum(sy), sum(sz));
