@@ -186,6 +186,17 @@ impl Proc {
         }
     }
 
+    /// Waits (at most 20 s) for the stderr line containing `ready` that a
+    /// program logs once it is connected; panics with the diagnostics if it
+    /// does not come. Returns the process for chaining.
+    pub fn assert_ready(mut self, ready: &str) -> Proc {
+        if self.wait_stderr(ready, deadline(20.0)).is_none() {
+            let diagnostics = self.diagnostics();
+            panic!("{} never logged {ready:?}\n{diagnostics}", self.name);
+        }
+        self
+    }
+
     /// Asserts that the process exits with status 0 within `within`.
     pub fn assert_exits_zero_within(&mut self, within: Duration) {
         let status = self.wait_exit(Instant::now() + within);

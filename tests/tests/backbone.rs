@@ -15,16 +15,13 @@ use slope_sensor::recording::Recording;
 fn start_estimator(prefix: &str, extra: &[&str]) -> Proc {
     let mut args = vec!["--service-prefix", prefix];
     args.extend_from_slice(extra);
-    let mut estimator = Proc::spawn("slope-estimator", &args);
-    let ready = estimator.wait_stderr("estimator ready", deadline(20.0));
-    assert!(ready.is_some(), "{}", estimator.diagnostics());
-    estimator
+    Proc::spawn("slope-estimator", &args).assert_ready("estimator ready")
 }
 
 /// Starts `slope-echo --json` and waits until it is subscribed.
 fn start_echo(prefix: &str, count: usize) -> Proc {
     let count = count.to_string();
-    let mut echo = Proc::spawn(
+    Proc::spawn(
         "slope-echo",
         [
             "--json",
@@ -35,10 +32,8 @@ fn start_echo(prefix: &str, count: usize) -> Proc {
             "--timeout",
             "120",
         ],
-    );
-    let ready = echo.wait_stderr("subscribed to estimates", deadline(20.0));
-    assert!(ready.is_some(), "{}", echo.diagnostics());
-    echo
+    )
+    .assert_ready("subscribed to estimates")
 }
 
 fn read_json_lines(echo: &mut Proc, count: usize, seconds: f64) -> Vec<Value> {

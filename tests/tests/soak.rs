@@ -165,21 +165,10 @@ fn replay_estimator_subscriber_soak_drops_nothing_and_stays_flat() {
     }
     let (shm_files_start, shm_bytes_start) = shm_usage();
 
-    let mut echo = Proc::spawn("slope-echo", ["--json", "--service-prefix", &prefix]);
-    assert!(
-        echo.wait_stderr("subscribed to estimates", deadline(20.0))
-            .is_some(),
-        "{}",
-        echo.diagnostics()
-    );
-    let mut estimator = Proc::spawn("slope-estimator", ["--service-prefix", &prefix]);
-    assert!(
-        estimator
-            .wait_stderr("estimator ready", deadline(20.0))
-            .is_some(),
-        "{}",
-        estimator.diagnostics()
-    );
+    let mut echo = Proc::spawn("slope-echo", ["--json", "--service-prefix", &prefix])
+        .assert_ready("subscribed to estimates");
+    let mut estimator = Proc::spawn("slope-estimator", ["--service-prefix", &prefix])
+        .assert_ready("estimator ready");
     let rate = RATE_HZ.to_string();
     let max_frames = frames.to_string();
     let mut replay = Proc::spawn(

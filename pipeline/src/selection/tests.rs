@@ -188,18 +188,27 @@ fn surfaces_facing_down_are_never_inclined() {
     assert!(angle_between_deg(&planes[1].plane.normal, &sel.up) > 150.0);
 }
 
+/// Ground, a nearer and larger copy of the ramp spoilt by `spoil`, and the
+/// ramp itself (a smaller, farther plane).
+fn ramp_behind_a_spoilt_copy(
+    scene: &Scene,
+    spoil: impl Fn(&mut PlaneQuality),
+) -> Vec<PlaneSummary> {
+    let mut spoilt = summary(scene, 1, 9000, 0.6);
+    spoil(&mut spoilt.quality);
+    spoilt.centroid *= 0.5;
+    vec![
+        summary(scene, 0, 30_000, 1.0),
+        spoilt,
+        summary(scene, 1, 6000, 0.3),
+    ]
+}
+
 /// A rough surface (relative RMS 0.55) is neither ground nor inclined plane.
 #[test]
 fn rough_surfaces_are_not_planes() {
     let scene = Scene::ramp(30.0);
-    let mut rough_side = summary(&scene, 1, 9000, 0.6);
-    rough_side.quality.relative_rms = 0.55;
-    rough_side.centroid *= 0.5;
-    let planes = vec![
-        summary(&scene, 0, 30_000, 1.0),
-        rough_side,
-        summary(&scene, 1, 6000, 0.3),
-    ];
+    let planes = ramp_behind_a_spoilt_copy(&scene, |q| q.relative_rms = 0.55);
     let sel = select_planes(&planes, mount_up(&scene), None, &config()).unwrap();
     assert_eq!(sel.inclined, 2);
     let mut rough_floor = planes.clone();
@@ -217,14 +226,7 @@ fn rough_surfaces_are_not_planes() {
 #[test]
 fn the_inclined_plane_is_flat_at_the_sensors_noise_level() {
     let scene = Scene::ramp(30.0);
-    let mut soft_side = summary(&scene, 1, 9000, 0.6);
-    soft_side.quality.noise_ratio = 3.8;
-    soft_side.centroid *= 0.5;
-    let planes = vec![
-        summary(&scene, 0, 30_000, 1.0),
-        soft_side,
-        summary(&scene, 1, 6000, 0.3),
-    ];
+    let planes = ramp_behind_a_spoilt_copy(&scene, |q| q.noise_ratio = 3.8);
     let sel = select_planes(&planes, mount_up(&scene), None, &config()).unwrap();
     assert_eq!(sel.inclined, 2);
     assert_eq!(
