@@ -113,7 +113,12 @@ pub struct SlopeEstimate {
     /// Distance from the camera to the inclined plane along the viewing
     /// direction (optical axis), metres; NaN when the axis does not meet it.
     pub distance_m: f64,
+    /// `[a, b, c, d]` of the ground plane (camera frame, unit normal towards
+    /// the camera, `d` its distance); all 0 without a measured ground. Also
+    /// set with status `no_inclined_plane` (the floor ahead is flat: here
+    /// it is, its TLS fit).
     pub ground_plane: [f64; 4],
+    /// `[a, b, c, d]` of the inclined plane; all 0 without one.
     pub inclined_plane: [f64; 4],
     pub ground_inliers: u32,
     pub inclined_inliers: u32,

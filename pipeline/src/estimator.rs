@@ -23,7 +23,8 @@ use crate::pass_through::PassThrough;
 use crate::plane_fit::{fit_least_squares, fit_tls, Moments, Plane};
 use crate::ransac_planes::{PlaneSegmenter, SegmentedPlane, Threshold};
 use crate::selection::{
-    axis_distance, select_planes, slope_sign, Ground, PlaneQuality, PlaneSummary, Selection,
+    axis_distance, select_ground, select_planes, slope_sign, Ground, PlaneQuality, PlaneSummary,
+    Selection,
 };
 use crate::statistical_outlier::StatisticalOutlierFilter;
 use crate::tracking::{FrameSlope, SlopeTracker, TrackedSlope};
@@ -253,7 +254,11 @@ impl Estimator {
             &self.config.selection,
         );
         clock.lap("selection");
-        let selection = selection?;
+        let selection = match selection {
+            Ok(selection) => selection,
+            Err(EstimateStatus::NoInclinedPlane) => return Ok(self.ground_only(cloud, mount_up)),
+            Err(status) => return Err(status),
+        };
         let planes = self.segmenter.planes();
         let inclined = PlaneSegment::of(
             &planes[selection.inclined],
@@ -310,6 +315,31 @@ impl Estimator {
             return Err(EstimateStatus::TooFewPoints);
         }
         Ok(())
+    }
+
+    /// No inclined plane: the estimate says so, with the ground plane (its
+    /// TLS fit) when one was seen, so that a planner knows the floor ahead
+    /// is flat and where it is.
+    fn ground_only(&mut self, cloud: &CloudView<'_>, mount_up: Option<Vector3<f64>>) -> Estimate {
+        let mut estimate = Estimate::failed(EstimateStatus::NoInclinedPlane, self.config.method);
+        let ground = select_ground(
+            &self.summaries,
+            mount_up,
+            Some(cloud.mount.height_m),
+            &self.config.selection,
+        );
+        if let Some(Ground::Planes(members)) = ground {
+            let segment = PlaneSegment::joined(
+                self.segmenter.planes(),
+                &self.summaries,
+                &members,
+                &mut self.ground_pixels,
+            );
+            estimate.ground = segment
+                .fit(SlopeMethod::Tls)
+                .map(|plane| segment.estimate(&plane));
+        }
+        estimate
     }
 
     /// What the selection needs of every segmented plane.

@@ -109,12 +109,15 @@ fn a_table_hiding_the_floor_is_not_the_ground() {
 /// A bed-like block 0.6 m high with a bumpy fabric cover in front of a
 /// camera 1.2 m high, the floor beside it: the soft side, flat within the
 /// RANSAC band (pieces of it very nearly) but not at the sensor's noise
-/// level, is no slope. (Without `max_noise_ratio` it was reported `ok` at
-/// 89-95 degrees; without `inclined_min_area_m2` a 0.027 m^2 piece was.)
+/// level, is no slope (without `max_noise_ratio` it was reported `ok` at
+/// 89-95 degrees; without `inclined_min_area_m2` a 0.027 m^2 piece was),
+/// and the ground reported is the floor, not the bed top.
 #[test]
 fn a_bed_s_soft_side_is_not_a_slope() {
     let e = estimates("bed", &scene_file("soft_block_bed.toml"));
     assert_no_ramp(&e);
+    assert!(e.iter().all(|e| e.ground.is_some()), "{e:?}");
+    assert_ground_at(&e, 1.2);
 }
 
 /// The same bed on the left, a 12 degree ramp ahead on the right: the
@@ -138,6 +141,9 @@ fn a_ceiling_is_never_a_slope() {
 fn a_flat_floor_has_no_ramp() {
     let e = estimates("flat", "[mount]\nheight_m = 0.6\npitch_deg = -25.0\n");
     assert_no_ramp(&e);
+    // The floor is still reported: flat, 0.6 m below the camera.
+    assert!(e.iter().all(|e| e.ground.is_some()), "{e:?}");
+    assert_ground_at(&e, 0.6);
 }
 
 #[test]

@@ -101,6 +101,20 @@ pub fn is_flat_at_noise_level(plane: &PlaneSummary, config: &SelectionConfig) ->
     is_flat(plane, config) && plane.quality.noise_ratio <= config.max_noise_ratio
 }
 
+/// The ground alone (the first half of [`select_planes`]); `None`: no
+/// level plane and no mount to fall back on.
+pub fn select_ground(
+    planes: &[PlaneSummary],
+    mount_up: Option<Vector3<f64>>,
+    mount_height_m: Option<f64>,
+    config: &SelectionConfig,
+) -> Option<Ground> {
+    let mount_up = mount_up.and_then(|u| u.try_normalize(1e-12));
+    let reference = mount_up.unwrap_or(-Vector3::y());
+    let height = mount_height_m.filter(|h| h.is_finite() && *h > 0.0 && mount_up.is_some());
+    ground::choose_ground(planes, &reference, height, mount_up.is_some(), config)
+}
+
 /// Chooses ground and inclined plane. `mount_up` is the mount's up vector
 /// (known pitch), `mount_height_m` its height above the ground (when known).
 /// The error is the status to report.
@@ -112,9 +126,8 @@ pub fn select_planes(
 ) -> Result<Selection, EstimateStatus> {
     let mount_up = mount_up.and_then(|u| u.try_normalize(1e-12));
     let reference = mount_up.unwrap_or(-Vector3::y());
-    let height = mount_height_m.filter(|h| h.is_finite() && *h > 0.0 && mount_up.is_some());
-    let ground = ground::choose_ground(planes, &reference, height, mount_up.is_some(), config)
-        .ok_or(EstimateStatus::NoGround)?;
+    let ground =
+        select_ground(planes, mount_up, mount_height_m, config).ok_or(EstimateStatus::NoGround)?;
     let (up, members): (Vector3<f64>, &[usize]) = match &ground {
         Ground::Planes(members) => (planes[members[0]].plane.normal, members),
         Ground::Mount => (reference, &[]),
