@@ -150,6 +150,10 @@ pub fn format_line(e: &SlopeEstimate) -> String {
             tracked_text(e),
             confidence_text(e)
         )
+    } else if e.ground_plane != [0.0; 4] {
+        // No slope, but the ground was measured: flat floor ahead.
+        let ground = format!("ground {:.2} m below", e.ground_plane[3]);
+        format!("{head}  {:<30} {ground}  {tail}", status.name())
     } else {
         format!("{head}  {:<30} {tail}", status.name())
     }
@@ -302,6 +306,24 @@ mod tests {
             line.contains("tracked -  confidence 1.00  latency"),
             "{line}"
         );
+    }
+
+    /// No inclined plane but a measured floor: the line says where it is.
+    #[test]
+    fn a_flat_floor_is_shown_with_its_distance() {
+        let flat = SlopeEstimate {
+            status: EstimateStatus::NoInclinedPlane as u32,
+            ground_plane: [0.0, -0.9, -0.42, 0.61],
+            ..SlopeEstimate::default()
+        };
+        let line = format_line(&flat);
+        assert!(line.contains("no_inclined_plane"), "{line}");
+        assert!(line.contains("ground 0.61 m below"), "{line}");
+        let nothing = SlopeEstimate {
+            status: EstimateStatus::NoInclinedPlane as u32,
+            ..SlopeEstimate::default()
+        };
+        assert!(!format_line(&nothing).contains("ground"));
     }
 
     #[test]
