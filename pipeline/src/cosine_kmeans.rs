@@ -60,12 +60,13 @@ pub struct CosineKmeans {
 }
 
 /// Lloyd iterations stop when no centre moves by more than this angle,
-/// degrees: a thousandth of a degree, far below the spreads (degrees) and
-/// the answer's resolution.
-pub const CONVERGED_DEG: f64 = 1e-3;
+/// degrees: a hundredth of a degree, far below the spreads (degrees) and
+/// the answer's resolution (the real frames' slopes are unchanged to the
+/// digit, the simulated ramp16's median moves by 0.015 degrees).
+pub const CONVERGED_DEG: f64 = 1e-2;
 
 /// [`CONVERGED_DEG`] as a cosine distance, `1 - cos`.
-const CONVERGED_COSINE_DISTANCE: f64 = 1.523e-10;
+const CONVERGED_COSINE_DISTANCE: f64 = 1.523e-8;
 
 /// Cosine distance of two unit vectors.
 #[inline]
@@ -375,7 +376,7 @@ mod tests {
     }
 
     #[test]
-    fn convergence_tolerance_is_a_thousandth_of_a_degree() {
+    fn convergence_tolerance_is_a_hundredth_of_a_degree() {
         let expected = 1.0 - CONVERGED_DEG.to_radians().cos();
         assert!((CONVERGED_COSINE_DISTANCE - expected).abs() < 1e-3 * expected);
     }
