@@ -23,7 +23,7 @@ use crate::pass_through::PassThrough;
 use crate::plane_fit::{fit_least_squares, fit_tls, Moments, Plane};
 use crate::ransac_planes::{PlaneSegmenter, SegmentedPlane, Threshold};
 use crate::selection::{
-    axis_distance, select_ground, select_planes, slope_sign, Ground, PlaneQuality, PlaneSummary,
+    axis_distance, select_ground, select_inclined, slope_sign, Ground, PlaneQuality, PlaneSummary,
     Selection,
 };
 use crate::statistical_outlier::StatisticalOutlierFilter;
@@ -247,17 +247,19 @@ impl Estimator {
         clock.lap("ransac");
         self.summarize_planes(cloud);
         let mount_up = cloud.mount.up_vector().map(Vector3::from);
-        let selection = select_planes(
+        let config = &self.config.selection;
+        let selection = select_ground(
             &self.summaries,
             mount_up,
             Some(cloud.mount.height_m),
-            &self.config.selection,
-        );
+            config,
+        )
+        .map(|ground| select_inclined(&self.summaries, ground, mount_up, config));
         clock.lap("selection");
         let selection = match selection {
-            Ok(selection) => selection,
-            Err(EstimateStatus::NoInclinedPlane) => return Ok(self.ground_only(cloud, mount_up)),
-            Err(status) => return Err(status),
+            None => return Err(EstimateStatus::NoGround),
+            Some(Ok(selection)) => selection,
+            Some(Err(ground)) => return Ok(self.ground_only(ground)),
         };
         let planes = self.segmenter.planes();
         let inclined = PlaneSegment::of(
@@ -320,15 +322,9 @@ impl Estimator {
     /// No inclined plane: the estimate says so, with the ground plane (its
     /// TLS fit) when one was seen, so that a planner knows the floor ahead
     /// is flat and where it is.
-    fn ground_only(&mut self, cloud: &CloudView<'_>, mount_up: Option<Vector3<f64>>) -> Estimate {
+    fn ground_only(&mut self, ground: Ground) -> Estimate {
         let mut estimate = Estimate::failed(EstimateStatus::NoInclinedPlane, self.config.method);
-        let ground = select_ground(
-            &self.summaries,
-            mount_up,
-            Some(cloud.mount.height_m),
-            &self.config.selection,
-        );
-        if let Some(Ground::Planes(members)) = ground {
+        if let Ground::Planes(members) = ground {
             let segment = PlaneSegment::joined(
                 self.segmenter.planes(),
                 &self.summaries,

@@ -124,23 +124,38 @@ pub fn select_planes(
     mount_height_m: Option<f64>,
     config: &SelectionConfig,
 ) -> Result<Selection, EstimateStatus> {
-    let mount_up = mount_up.and_then(|u| u.try_normalize(1e-12));
-    let reference = mount_up.unwrap_or(-Vector3::y());
     let ground =
         select_ground(planes, mount_up, mount_height_m, config).ok_or(EstimateStatus::NoGround)?;
+    select_inclined(planes, ground, mount_up, config)
+        .map_err(|_ground| EstimateStatus::NoInclinedPlane)
+}
+
+/// The inclined plane over `ground` (the second half of
+/// [`select_planes`]); without one, the error gives the ground back (a
+/// flat floor ahead is still a measurement).
+pub fn select_inclined(
+    planes: &[PlaneSummary],
+    ground: Ground,
+    mount_up: Option<Vector3<f64>>,
+    config: &SelectionConfig,
+) -> Result<Selection, Ground> {
+    let reference = mount_up
+        .and_then(|u| u.try_normalize(1e-12))
+        .unwrap_or(-Vector3::y());
     let (up, members): (Vector3<f64>, &[usize]) = match &ground {
         Ground::Planes(members) => (planes[members[0]].plane.normal, members),
         Ground::Mount => (reference, &[]),
     };
     let forward = forward_direction(&up);
-    let inclined = inclined::choose_inclined(planes, members, &up, &forward, config)
-        .ok_or(EstimateStatus::NoInclinedPlane)?;
-    Ok(Selection {
-        ground,
-        inclined,
-        up,
-        forward,
-    })
+    match inclined::choose_inclined(planes, members, &up, &forward, config) {
+        Some(inclined) => Ok(Selection {
+            ground,
+            inclined,
+            up,
+            forward,
+        }),
+        None => Err(ground),
+    }
 }
 
 #[cfg(test)]
