@@ -96,6 +96,15 @@ fn assert_ground_at(estimates: &[Estimate], height_m: f64) {
     }
 }
 
+/// Every frame reports a ground plane, `height_m` below the camera.
+fn assert_ground_seen_at(estimates: &[Estimate], height_m: f64) {
+    assert!(
+        estimates.iter().all(|e| e.ground.is_some()),
+        "{estimates:?}"
+    );
+    assert_ground_at(estimates, height_m);
+}
+
 /// A low, wide table hides most of the floor in front of a 16 degree ramp
 /// 3 m ahead: the table top is not the ground (the mount's height says so),
 /// and the ramp is measured.
@@ -116,8 +125,7 @@ fn a_table_hiding_the_floor_is_not_the_ground() {
 fn a_bed_s_soft_side_is_not_a_slope() {
     let e = estimates("bed", &scene_file("soft_block_bed.toml"));
     assert_no_ramp(&e);
-    assert!(e.iter().all(|e| e.ground.is_some()), "{e:?}");
-    assert_ground_at(&e, 1.2);
+    assert_ground_seen_at(&e, 1.2);
 }
 
 /// The same bed on the left, a 12 degree ramp ahead on the right: the
@@ -142,8 +150,7 @@ fn a_flat_floor_has_no_ramp() {
     let e = estimates("flat", "[mount]\nheight_m = 0.6\npitch_deg = -25.0\n");
     assert_no_ramp(&e);
     // The floor is still reported: flat, 0.6 m below the camera.
-    assert!(e.iter().all(|e| e.ground.is_some()), "{e:?}");
-    assert_ground_at(&e, 0.6);
+    assert_ground_seen_at(&e, 0.6);
 }
 
 #[test]
