@@ -12,14 +12,20 @@
 //! | `slope/cloud` | event | "a new cloud was sent" | - |
 //! | `slope/estimate` | publish-subscribe | [`SlopeEstimate`] (`slope.SlopeEstimate.v2`) | - |
 //! | `slope/estimate` | event | "a new estimate was sent" | - |
+//! | `slope/health` | publish-subscribe | [`Health`] (`slope.Health.v1`), about once a second from each daemon | - |
+//! | `slope/health` | event | "a new health report was sent" | - |
 
 mod cloud;
 pub mod confidence;
 mod estimate;
+mod health;
 mod services;
 
 pub use cloud::{CloudHeader, CloudPoint, CloudSource, Intrinsics, Mount};
 pub use estimate::{EstimateStatus, SlopeEstimate, SlopeMethod};
+pub use health::{
+    Health, HealthComponent, StageHealth, TimingStats, LAST_ERROR_LEN, MAX_STAGES, STAGE_NAME_LEN,
+};
 pub use services::{
     ServiceNames, DEFAULT_MAX_CLOUD_POINTS, DEFAULT_SERVICE_PREFIX, SERVICE_PREFIX_ENV,
 };

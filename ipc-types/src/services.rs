@@ -19,6 +19,9 @@ pub const CLOUD_SUFFIX: &str = "cloud";
 /// Suffix of the estimate service (publish-subscribe and event).
 pub const ESTIMATE_SUFFIX: &str = "estimate";
 
+/// Suffix of the health service (publish-subscribe and event).
+pub const HEALTH_SUFFIX: &str = "health";
+
 /// The service names for one prefix.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ServiceNames {
@@ -55,6 +58,11 @@ impl ServiceNames {
     pub fn estimate(&self) -> String {
         format!("{}/{}", self.prefix, ESTIMATE_SUFFIX)
     }
+
+    /// `<prefix>/health`: the daemons' health reports (and their event).
+    pub fn health(&self) -> String {
+        format!("{}/{}", self.prefix, HEALTH_SUFFIX)
+    }
 }
 
 impl Default for ServiceNames {
@@ -72,6 +80,7 @@ mod tests {
         let names = ServiceNames::new("test-42");
         assert_eq!(names.cloud(), "test-42/cloud");
         assert_eq!(names.estimate(), "test-42/estimate");
+        assert_eq!(names.health(), "test-42/health");
         assert_eq!(ServiceNames::default().cloud(), "slope/cloud");
     }
 }

@@ -18,7 +18,7 @@ use iceoryx2::prelude::*;
 use iceoryx2::sample::Sample;
 use iceoryx2::service::port_factory::event::PortFactory as EventFactory;
 use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFactory;
-use slope_ipc_types::{now_ns, CloudHeader, CloudPoint, ServiceNames, SlopeEstimate};
+use slope_ipc_types::{now_ns, CloudHeader, CloudPoint, Health, ServiceNames, SlopeEstimate};
 
 use crate::projection::Projector;
 use crate::source::{SourceFrame, SourceInfo};
@@ -33,6 +33,13 @@ pub const CLOUD_SUBSCRIBER_BUFFER: usize = 2;
 pub const ESTIMATE_MAX_SUBSCRIBERS: usize = 16;
 /// Estimates a subscriber may hold unread (about 2 s at 30 Hz).
 pub const ESTIMATE_SUBSCRIBER_BUFFER: usize = 64;
+/// Daemons that may report on one health topic at once (estimator,
+/// capture or replay, and a spare for a second recorder or a test).
+pub const HEALTH_MAX_PUBLISHERS: usize = 4;
+/// Most processes that may subscribe to health reports at once.
+pub const HEALTH_MAX_SUBSCRIBERS: usize = 8;
+/// Health reports a subscriber may hold unread (about 4 s of all daemons).
+pub const HEALTH_SUBSCRIBER_BUFFER: usize = 16;
 
 /// An iceoryx2 operation that failed, with the service it concerned.
 #[derive(Debug, thiserror::Error)]
@@ -98,6 +105,7 @@ fn service_name(name: &str) -> Result<ServiceName, IpcError> {
 
 type CloudService = PubSubFactory<ipc::Service, [CloudPoint], CloudHeader>;
 type EstimateService = PubSubFactory<ipc::Service, SlopeEstimate, ()>;
+type HealthService = PubSubFactory<ipc::Service, Health, ()>;
 
 fn cloud_service(node: &Node<ipc::Service>, name: &str) -> Result<CloudService, IpcError> {
     node.service_builder(&service_name(name)?)
@@ -125,6 +133,19 @@ fn estimate_service(node: &Node<ipc::Service>, name: &str) -> Result<EstimateSer
         .enable_safe_overflow(true)
         .open_or_create()
         .map_err(|e| IpcError::new("open or create the estimate service", name, e))
+}
+
+fn health_service(node: &Node<ipc::Service>, name: &str) -> Result<HealthService, IpcError> {
+    node.service_builder(&service_name(name)?)
+        .publish_subscribe::<Health>()
+        .max_publishers(HEALTH_MAX_PUBLISHERS)
+        .max_subscribers(HEALTH_MAX_SUBSCRIBERS)
+        .subscriber_max_buffer_size(HEALTH_SUBSCRIBER_BUFFER)
+        .subscriber_max_borrowed_samples(2)
+        .history_size(0)
+        .enable_safe_overflow(true)
+        .open_or_create()
+        .map_err(|e| IpcError::new("open or create the health service", name, e))
 }
 
 fn event_service(
@@ -482,5 +503,73 @@ impl EstimateSubscriber {
             .receive()
             .map(|s| s.map(|sample| *sample.payload()))
             .map_err(|e| IpcError::new("receive an estimate", &self.topic.name, e))
+    }
+}
+
+/// Publishes a daemon's health reports on `<prefix>/health`.
+pub struct HealthPublisher {
+    publisher: Publisher<ipc::Service, Health, ()>,
+    notifier: Notifier<ipc::Service>,
+    name: String,
+}
+
+impl HealthPublisher {
+    pub fn create(node: &Node<ipc::Service>, names: &ServiceNames) -> Result<Self, IpcError> {
+        let name = names.health();
+        let publisher = health_service(node, &name)?
+            .publisher_builder()
+            .create()
+            .map_err(|e| IpcError::new("create a publisher", &name, e))?;
+        let notifier = create_notifier(node, &name)?;
+        Ok(Self {
+            publisher,
+            notifier,
+            name,
+        })
+    }
+
+    pub fn service_name(&self) -> &str {
+        &self.name
+    }
+
+    /// Sends a report.
+    pub fn publish(&self, health: &Health) -> Result<(), IpcError> {
+        let sample = self
+            .publisher
+            .loan_uninit()
+            .map_err(|e| IpcError::new("loan a sample", &self.name, e))?;
+        sample
+            .write_payload(*health)
+            .send()
+            .map_err(|e| IpcError::new("send a health report", &self.name, e))?;
+        self.notifier
+            .notify()
+            .map_err(|e| IpcError::new("notify subscribers", &self.name, e))?;
+        Ok(())
+    }
+}
+
+/// Subscribes to health reports and wakes on the health event.
+pub struct HealthSubscriber {
+    topic: TopicSubscriber<Health, ()>,
+}
+
+impl HealthSubscriber {
+    pub fn create(node: &Node<ipc::Service>, names: &ServiceNames) -> Result<Self, IpcError> {
+        Ok(Self {
+            topic: TopicSubscriber::create(node, names.health(), health_service)?,
+        })
+    }
+
+    pub fn listener(&self) -> &TopicListener {
+        &self.topic.listener
+    }
+
+    pub fn receive(&self) -> Result<Option<Health>, IpcError> {
+        self.topic
+            .subscriber
+            .receive()
+            .map(|s| s.map(|sample| *sample.payload()))
+            .map_err(|e| IpcError::new("receive a health report", &self.topic.name, e))
     }
 }

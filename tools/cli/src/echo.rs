@@ -5,22 +5,24 @@ use std::time::{Duration, Instant};
 
 use clap::Parser;
 use serde::Serialize;
-use slope_ipc_types::{EstimateStatus, SlopeEstimate};
-use slope_sensor::ipc::{create_node, EstimateSubscriber};
+use slope_ipc_types::{EstimateStatus, Health, SlopeEstimate, TimingStats};
+use slope_sensor::ipc::{create_node, EstimateSubscriber, HealthSubscriber, TopicListener};
 use slope_sensor::publish::StopFlag;
 
 use crate::cli::{node_name, wait_loop, CommonArgs, SilenceNote};
+use crate::health::summary_line;
 use crate::replay::positive_f64;
 
 #[derive(Debug, Parser)]
 #[command(
     name = "slope-echo",
     version,
-    about = "Print slope estimates from the estimate topic, one line each",
+    about = "Print slope estimates from the estimate topic (or health reports), one line each",
     after_help = "Examples:
   slope-echo                          # readable lines until Ctrl-C
   slope-echo --json | jq .slope_deg   # one JSON object per line
   slope-echo --count 10 --timeout 5   # ten estimates, fail if they take over 5 s
+  slope-echo --health                 # the daemons' health reports instead
 
 Readable lines show the slope ± its spread, the distance ahead, the tracked slope ± its \
 spread (- without a track) and the confidence (with the reasons when below 1).
@@ -30,12 +32,24 @@ source_stamp_ns, status, method, slope_deg, std_deg, distance_m, latency_ms (cap
 publish), dropped_frames, ground_plane, inclined_plane ([a, b, c, d] or null), ground_inliers, \
 inclined_inliers, ground_rms_m, inclined_rms_m, ground_area_m2, inclined_area_m2, samples, \
 ground_from_mount, processing_ms, confidence, confidence_reasons (names), tracked_slope_deg, \
-tracked_std_deg, tracked_frames, tracked_accepted."
+tracked_std_deg, tracked_frames, tracked_accepted.
+
+Health lines (--health) show, per report: the daemon and its pid, uptime, rates in and out, \
+frames in/out/dropped, reconnects, capture-to-publish latency and per-stage times as \
+median/p95/max ms over the report's window, and the last error. With --json: component, pid, \
+stamp_ns, uptime_ms, frames_in, frames_out, frames_dropped, reconnects, errors, rate_in_hz, \
+rate_out_hz, window_ms, latency {median_ms, p95_ms, max_ms, count}, stages [{name, median_ms, \
+p95_ms, max_ms, count}], last_error, last_error_stamp_ns."
 )]
 pub struct EchoArgs {
     /// One JSON object per line instead of readable text.
     #[arg(long)]
     pub json: bool,
+
+    /// Print the daemons' health reports (<prefix>/health) instead of
+    /// estimates; --count and --timeout then count reports.
+    #[arg(long)]
+    pub health: bool,
 
     /// Exit (status 0) after this many estimates.
     #[arg(long)]
@@ -197,9 +211,62 @@ fn tracked_text(e: &SlopeEstimate) -> String {
 pub fn run(args: &EchoArgs, stop: &StopFlag) -> anyhow::Result<u64> {
     let names = args.common.service_names();
     let node = create_node(&node_name("slope-echo"))?;
+    if args.health {
+        let subscriber = HealthSubscriber::create(&node, &names)?;
+        let topic = Topic {
+            service: names.health(),
+            what: "health report",
+            publisher: "slope-estimator or slope-capture",
+        };
+        tracing::info!(service = %topic.service, "subscribed to health reports");
+        return echo(args, stop, subscriber.listener(), &topic, || {
+            let Some(health) = subscriber.receive()? else {
+                return Ok(None);
+            };
+            Ok(Some(if args.json {
+                serde_json::to_string(&HealthJson::from(&health))?
+            } else {
+                summary_line(&health)
+            }))
+        });
+    }
     let subscriber = EstimateSubscriber::create(&node, &names)?;
-    tracing::info!(service = %names.estimate(), "subscribed to estimates");
+    let topic = Topic {
+        service: names.estimate(),
+        what: "estimate",
+        publisher: "slope-estimator",
+    };
+    tracing::info!(service = %topic.service, "subscribed to estimates");
+    echo(args, stop, subscriber.listener(), &topic, || {
+        let Some(estimate) = subscriber.receive()? else {
+            return Ok(None);
+        };
+        Ok(Some(if args.json {
+            serde_json::to_string(&EstimateJson::from(&estimate))?
+        } else {
+            format_line(&estimate)
+        }))
+    })
+}
 
+/// The topic `slope-echo` prints.
+struct Topic {
+    service: String,
+    /// What arrives on it, singular ("estimate").
+    what: &'static str,
+    /// Which program publishes it.
+    publisher: &'static str,
+}
+
+/// Prints the lines `next` makes (`None`: nothing waiting) until --count,
+/// --timeout or a stop; returns how many were printed.
+fn echo(
+    args: &EchoArgs,
+    stop: &StopFlag,
+    listener: &TopicListener,
+    topic: &Topic,
+    mut next: impl FnMut() -> anyhow::Result<Option<String>>,
+) -> anyhow::Result<u64> {
     let deadline = args
         .timeout
         .map(|s| Instant::now() + Duration::from_secs_f64(s));
@@ -207,20 +274,14 @@ pub fn run(args: &EchoArgs, stop: &StopFlag) -> anyhow::Result<u64> {
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     let count_reached = |received: u64| args.count.is_some_and(|c| received >= c);
-    let service = names.estimate().to_string();
-    let mut silence = SilenceNote::new("estimate", &service, "slope-estimator");
-    let result = wait_loop(subscriber.listener(), stop, || {
+    let mut silence = SilenceNote::new(topic.what, &topic.service, topic.publisher);
+    let result = wait_loop(listener, stop, || {
         silence.tick();
         while !count_reached(received) {
-            let Some(estimate) = subscriber.receive()? else {
+            let Some(line) = next()? else {
                 break;
             };
             silence.heard();
-            let line = if args.json {
-                serde_json::to_string(&EstimateJson::from(&estimate))?
-            } else {
-                format_line(&estimate)
-            };
             writeln!(out, "{line}").and_then(|()| out.flush())?;
             received += 1;
         }
@@ -240,13 +301,94 @@ pub fn run(args: &EchoArgs, stop: &StopFlag) -> anyhow::Result<u64> {
     if let Some(count) = args.count {
         if received < count && !stop.is_stopped() {
             anyhow::bail!(
-                "only {received} of {count} estimates arrived on '{}' within {} s",
-                names.estimate(),
+                "only {received} of {count} {}s arrived on '{}' within {} s",
+                topic.what,
+                topic.service,
                 args.timeout.unwrap_or_default()
             );
         }
     }
     Ok(received)
+}
+
+/// Timing figures in JSON: `null` where there were no frames.
+#[derive(Debug, Serialize)]
+pub struct TimingJson {
+    pub median_ms: Option<f64>,
+    pub p95_ms: Option<f64>,
+    pub max_ms: Option<f64>,
+    pub count: u64,
+}
+
+impl From<&TimingStats> for TimingJson {
+    fn from(t: &TimingStats) -> Self {
+        Self {
+            median_ms: finite(t.median_ms),
+            p95_ms: finite(t.p95_ms),
+            max_ms: finite(t.max_ms),
+            count: t.count,
+        }
+    }
+}
+
+/// One stage's timing in JSON.
+#[derive(Debug, Serialize)]
+pub struct StageJson {
+    pub name: String,
+    #[serde(flatten)]
+    pub timing: TimingJson,
+}
+
+/// The JSON form of a health report (`slope-echo --health --json`).
+#[derive(Debug, Serialize)]
+pub struct HealthJson {
+    pub component: &'static str,
+    pub pid: u32,
+    pub stamp_ns: u64,
+    pub uptime_ms: u64,
+    pub frames_in: u64,
+    pub frames_out: u64,
+    pub frames_dropped: u64,
+    pub reconnects: u64,
+    pub errors: u64,
+    pub rate_in_hz: f64,
+    pub rate_out_hz: f64,
+    pub window_ms: u64,
+    pub latency: TimingJson,
+    pub stages: Vec<StageJson>,
+    pub last_error: Option<String>,
+    pub last_error_stamp_ns: Option<u64>,
+}
+
+impl From<&Health> for HealthJson {
+    fn from(h: &Health) -> Self {
+        let error = h.last_error();
+        Self {
+            component: h.component().map_or("unknown", |c| c.name()),
+            pid: h.pid,
+            stamp_ns: h.stamp_ns,
+            uptime_ms: h.uptime_ms,
+            frames_in: h.frames_in,
+            frames_out: h.frames_out,
+            frames_dropped: h.frames_dropped,
+            reconnects: h.reconnects,
+            errors: h.errors,
+            rate_in_hz: h.rate_in_hz,
+            rate_out_hz: h.rate_out_hz,
+            window_ms: h.window_ms,
+            latency: TimingJson::from(&h.latency),
+            stages: h
+                .stages()
+                .iter()
+                .map(|s| StageJson {
+                    name: s.name().to_string(),
+                    timing: TimingJson::from(&s.timing),
+                })
+                .collect(),
+            last_error: (!error.is_empty()).then(|| error.to_string()),
+            last_error_stamp_ns: (h.last_error_stamp_ns != 0).then_some(h.last_error_stamp_ns),
+        }
+    }
 }
 
 #[cfg(test)]
@@ -364,5 +506,26 @@ mod tests {
         }
         assert_eq!(value["confidence_reasons"], serde_json::json!([]));
         assert_eq!(value["tracked_accepted"], false);
+    }
+
+    #[test]
+    fn health_json_has_every_field_and_null_for_no_frames() {
+        let mut h = Health::new(slope_ipc_types::HealthComponent::Estimator);
+        h.frames_in = 5;
+        h.push_stage("total", TimingStats::of(&mut [2.0, 4.0]));
+        h.push_stage("outlier", TimingStats::EMPTY);
+        let value = serde_json::to_value(HealthJson::from(&h)).unwrap();
+        assert_eq!(value.as_object().unwrap().len(), 16);
+        assert_eq!(value["component"], "estimator");
+        assert_eq!(value["frames_in"], 5);
+        assert_eq!(value["stages"][0]["name"], "total");
+        assert_eq!(value["stages"][0]["max_ms"], 4.0);
+        assert!(value["stages"][1]["median_ms"].is_null());
+        assert!(value["latency"]["p95_ms"].is_null());
+        assert!(value["last_error"].is_null());
+        h.set_last_error("no clouds", 7);
+        let value = serde_json::to_value(HealthJson::from(&h)).unwrap();
+        assert_eq!(value["last_error"], "no clouds");
+        assert_eq!(value["last_error_stamp_ns"], 7);
     }
 }

@@ -11,12 +11,13 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Parser;
-use slope_ipc_types::{SlopeEstimate, SlopeMethod};
+use slope_ipc_types::{HealthComponent, SlopeEstimate, SlopeMethod};
 use slope_pipeline::{parse_method, CloudView, Estimator, EstimatorConfig, FrameInfo};
-use slope_sensor::ipc::{create_node, CloudSubscriber, EstimatePublisher};
+use slope_sensor::ipc::{create_node, CloudSubscriber, EstimatePublisher, HealthPublisher};
 use slope_sensor::publish::StopFlag;
 
 use crate::cli::{node_name, wait_loop, CommonArgs, SilenceNote};
+use crate::health::{HealthReporter, DEFAULT_HEALTH_INTERVAL_S};
 use crate::service_manager::ServiceManager;
 
 #[derive(Debug, Parser)]
@@ -33,7 +34,11 @@ Stops cleanly on SIGINT or SIGTERM.",
   slope-estimator --method tls                 # total-least-squares baseline
   slope-estimator --config estimator.toml      # parameters from a TOML file
   slope-estimator --config estimator.toml --print-config   # every parameter in effect, then exit
-  slope-estimator --service-prefix robot2 -v   # another stack, debug logs"
+  slope-estimator --service-prefix robot2 -v   # another stack, debug logs
+
+Health: a report on <prefix>/health every --health-interval seconds (frames in/out/dropped, \
+rates, capture-to-publish latency and per-stage median/p95/max ms over that interval, the last \
+error); `slope-echo --health` shows it. The same summary over 10 s goes to the log at INFO."
 )]
 pub struct EstimatorArgs {
     /// Fit used for the planes: paper (normals, cosine k-means, cumulative
@@ -56,8 +61,27 @@ pub struct EstimatorArgs {
     #[arg(long)]
     pub print_config: bool,
 
+    /// Seconds between health reports on <prefix>/health (0: none, the
+    /// summary is still logged every 10 s).
+    #[arg(long, default_value_t = DEFAULT_HEALTH_INTERVAL_S, value_parser = health_interval_arg)]
+    pub health_interval: f64,
+
     #[command(flatten)]
     pub common: CommonArgs,
+}
+
+/// `--health-interval`: 0 (off) or 0.05-3600 seconds.
+pub fn health_interval_arg(text: &str) -> Result<f64, String> {
+    let value: f64 = text
+        .parse()
+        .map_err(|_| format!("'{text}' is not a number"))?;
+    if value == 0.0 || (0.05..=3600.0).contains(&value) {
+        Ok(value)
+    } else {
+        Err(format!(
+            "'{text}' must be 0 (no reports) or from 0.05 to 3600 seconds"
+        ))
+    }
 }
 
 pub fn method_arg(text: &str) -> Result<SlopeMethod, String> {
@@ -93,9 +117,6 @@ pub struct EstimatorStats {
     pub dropped: u64,
 }
 
-/// How often the estimator logs its throughput (the journal's view of it).
-pub const SUMMARY_INTERVAL: std::time::Duration = std::time::Duration::from_secs(10);
-
 /// The configuration as TOML, every key (a config file for the estimator).
 pub fn config_toml(config: &EstimatorConfig) -> anyhow::Result<String> {
     toml::to_string(config).context("cannot write the configuration as TOML")
@@ -111,6 +132,11 @@ pub fn run(args: &EstimatorArgs, stop: &StopFlag) -> anyhow::Result<EstimatorSta
     let node = create_node(&node_name("slope-estimator"))?;
     let subscriber = CloudSubscriber::create(&node, &names)?;
     let publisher = EstimatePublisher::create(&node, &names)?;
+    let health_publisher = if args.health_interval > 0.0 {
+        Some(HealthPublisher::create(&node, &names)?)
+    } else {
+        None
+    };
     tracing::info!(
         method = config.method.name(),
         clouds = subscriber.service_name(),
@@ -125,6 +151,11 @@ pub fn run(args: &EstimatorArgs, stop: &StopFlag) -> anyhow::Result<EstimatorSta
         last_index: None,
         last_slope_deg: None,
         max_frames: args.max_frames,
+        health: HealthReporter::new(
+            HealthComponent::Estimator,
+            health_publisher,
+            args.health_interval,
+        ),
     };
     let mut silence = SilenceNote::new(
         "cloud",
@@ -134,7 +165,6 @@ pub fn run(args: &EstimatorArgs, stop: &StopFlag) -> anyhow::Result<EstimatorSta
     let mut manager = ServiceManager::from_env();
     manager.ready("waiting for clouds");
     let started = Instant::now();
-    let mut last_summary = started;
     let result = wait_loop(subscriber.listener(), stop, || {
         let processed = worker.stats.processed;
         worker.on_cloud_event()?;
@@ -143,10 +173,7 @@ pub fn run(args: &EstimatorArgs, stop: &StopFlag) -> anyhow::Result<EstimatorSta
         }
         silence.tick();
         manager.tick(|| worker.status_line(started.elapsed()));
-        if last_summary.elapsed() >= SUMMARY_INTERVAL {
-            tracing::info!("{}", worker.status_line(started.elapsed()));
-            last_summary = Instant::now();
-        }
+        worker.health.tick();
         Ok(!worker.done())
     });
     manager.stopping();
@@ -168,6 +195,7 @@ struct Worker<'a> {
     /// The last `ok` slope, degrees.
     last_slope_deg: Option<f64>,
     max_frames: Option<u64>,
+    health: HealthReporter,
 }
 
 impl Worker<'_> {
@@ -209,6 +237,8 @@ impl Worker<'_> {
             tracing::debug!(frame = header.frame_index, missed, "dropped stale clouds");
         }
         self.stats.dropped += missed;
+        self.health.monitor.frames_in(1 + missed);
+        self.health.monitor.dropped(missed);
         self.last_index = Some(header.frame_index);
         tracing::debug!(
             frame = header.frame_index,
@@ -238,6 +268,11 @@ impl Worker<'_> {
         drop(sample);
         let sent = self.publisher.publish(&message)?;
         self.stats.processed += 1;
+        let mut stages = estimate.timings.stages.clone();
+        stages.push(("total", estimate.timings.total_ms));
+        self.health
+            .monitor
+            .frame_out(Some(sent.latency_ms()), &stages);
         tracing::debug!(
             frame = sent.frame_index,
             status = sent.status().name(),

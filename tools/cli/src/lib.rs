@@ -9,6 +9,7 @@ pub mod demo;
 pub mod echo;
 pub mod estimator;
 pub mod eval;
+pub mod health;
 pub mod mount_args;
 pub mod record;
 pub mod render;
