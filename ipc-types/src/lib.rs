@@ -38,3 +38,63 @@ pub fn now_ns() -> u64 {
         .map(|d| u64::try_from(d.as_nanos()).unwrap_or(u64::MAX))
         .unwrap_or(0)
 }
+
+/// Where each field of a message lies: for bindings in other languages and
+/// the tests that keep them in step (`tests/tests/python_client.rs`).
+pub mod layout {
+    use core::mem::{offset_of, size_of};
+
+    /// One field: name, byte offset, byte size.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+    pub struct FieldLayout {
+        pub name: &'static str,
+        pub offset: usize,
+        pub size: usize,
+    }
+
+    /// The size of a field, from a projection onto it.
+    fn field_size<T, F>(_: fn(&T) -> &F) -> usize {
+        size_of::<F>()
+    }
+
+    macro_rules! fields {
+        ($ty:ty: $($name:ident),* $(,)?) => {
+            vec![$(FieldLayout {
+                name: stringify!($name),
+                offset: offset_of!($ty, $name),
+                size: field_size(|v: &$ty| &v.$name),
+            }),*]
+        };
+    }
+
+    /// The fields of [`crate::SlopeEstimate`], in declaration order.
+    pub fn slope_estimate() -> Vec<FieldLayout> {
+        fields!(crate::SlopeEstimate:
+            frame_index, capture_stamp_ns, publish_stamp_ns, source_stamp_ns, dropped_frames,
+            status, method, slope_deg, slope_std_deg, distance_m, ground_plane, inclined_plane,
+            ground_inliers, inclined_inliers, samples, ground_from_mount, processing_us,
+            confidence, confidence_reasons, reserved, ground_rms_m, inclined_rms_m,
+            ground_area_m2, inclined_area_m2, tracked_slope_deg, tracked_std_deg,
+            tracked_frames, tracked_accepted,
+        )
+    }
+
+    /// The fields of [`crate::Health`], in declaration order.
+    pub fn health() -> Vec<FieldLayout> {
+        fields!(crate::Health:
+            stamp_ns, uptime_ms, component, pid, frames_in, frames_out, frames_dropped,
+            reconnects, errors, rate_in_hz, rate_out_hz, window_ms, latency, stage_count,
+            reserved, stages, last_error_stamp_ns, last_error,
+        )
+    }
+
+    /// The fields of [`crate::TimingStats`].
+    pub fn timing_stats() -> Vec<FieldLayout> {
+        fields!(crate::TimingStats: median_ms, p95_ms, max_ms, count)
+    }
+
+    /// The fields of [`crate::StageHealth`].
+    pub fn stage_health() -> Vec<FieldLayout> {
+        fields!(crate::StageHealth: name, timing)
+    }
+}

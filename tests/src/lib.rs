@@ -123,8 +123,24 @@ impl Proc {
         S: AsRef<std::ffi::OsStr>,
     {
         let mut command = Command::new(binary(name));
-        command.args(args).env_remove("RUST_LOG");
-        command.envs(env.iter().copied());
+        command.args(args).envs(env.iter().copied());
+        Self::start(name, command)
+    }
+
+    /// Starts the program at `path` (not one of ours: a Python script's
+    /// interpreter, say) with `args`.
+    pub fn spawn_path<I, S>(path: &Path, args: I) -> Proc
+    where
+        I: IntoIterator<Item = S>,
+        S: AsRef<std::ffi::OsStr>,
+    {
+        let mut command = Command::new(path);
+        command.args(args);
+        Self::start(&path.display().to_string(), command)
+    }
+
+    fn start(name: &str, mut command: Command) -> Proc {
+        command.env_remove("RUST_LOG");
         if let Some(filter) = std::env::var_os("SLOPE_TEST_LOG") {
             command.env("RUST_LOG", filter);
         }
