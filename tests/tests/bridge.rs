@@ -1,0 +1,115 @@
+//! slope-replay -> slope-estimator -> slope-bridge -> Zenoh -> a subscriber
+//! in this test, on the loopback only (`tcp/127.0.0.1:<free port>`, no
+//! multicast scouting): every estimate arrives, in order, as versioned
+//! JSON, and so do the health reports.
+#![cfg(feature = "zenoh")]
+
+use std::net::TcpListener;
+use std::time::{Duration, Instant};
+
+use serde_json::Value;
+use slope_integration_tests::{deadline, recording, unique_prefix, Proc};
+use zenoh::Wait;
+
+/// A TCP port nobody listens on now.
+fn free_port() -> u16 {
+    let listener = TcpListener::bind("127.0.0.1:0").expect("bind a free port");
+    listener.local_addr().expect("local address").port()
+}
+
+/// The next JSON sample of `subscriber`, or `None` at `until`.
+fn next_json(
+    subscriber: &zenoh::pubsub::Subscriber<
+        zenoh::handlers::FifoChannelHandler<zenoh::sample::Sample>,
+    >,
+    until: Instant,
+) -> Option<Value> {
+    let left = until.saturating_duration_since(Instant::now());
+    let sample = subscriber.recv_timeout(left).ok().flatten()?;
+    let text = sample.payload().try_to_string().expect("UTF-8 payload");
+    Some(serde_json::from_str(&text).unwrap_or_else(|e| panic!("{text:?}: {e}")))
+}
+
+#[test]
+fn every_estimate_crosses_the_bridge_as_versioned_json() {
+    let prefix = unique_prefix("bridge");
+    let endpoint = format!("tcp/127.0.0.1:{}", free_port());
+    let _estimator = Proc::spawn(
+        "slope-estimator",
+        ["--service-prefix", &prefix, "--health-interval", "0.2"],
+    )
+    .assert_ready("estimator ready");
+    let mut bridge = Proc::spawn(
+        "slope-bridge",
+        ["--service-prefix", &prefix, "--listen", &endpoint],
+    )
+    .assert_ready("bridge ready");
+
+    let mut config = zenoh::Config::default();
+    for (key, value) in [
+        ("mode", "\"peer\"".to_string()),
+        ("scouting/multicast/enabled", "false".to_string()),
+        ("connect/endpoints", format!("[\"{endpoint}\"]")),
+    ] {
+        config.insert_json5(key, &value).expect("zenoh setting");
+    }
+    let session = zenoh::open(config).wait().expect("zenoh session");
+    let estimates = session
+        .declare_subscriber(format!("{prefix}/estimate"))
+        .wait()
+        .expect("estimate subscriber");
+    let health = session
+        .declare_subscriber(format!("{prefix}/health"))
+        .wait()
+        .expect("health subscriber");
+
+    // The path is up once a health report (every 0.2 s) came across.
+    let report = next_json(&health, deadline(30.0))
+        .unwrap_or_else(|| panic!("no health report over Zenoh\n{}", bridge.diagnostics()));
+    assert_eq!(report["schema"], "slope.health.json/1", "{report}");
+    assert_eq!(report["component"], "estimator", "{report}");
+
+    let frames = 8;
+    let mut replay = Proc::spawn(
+        "slope-replay",
+        [
+            recording("ramp16").to_str().expect("utf-8 path"),
+            "--service-prefix",
+            &prefix,
+            "--rate",
+            "5",
+            "--max-frames",
+            &frames.to_string(),
+            "--wait-subscribers",
+            "1",
+        ],
+    );
+    // Every estimate the estimator published, in order, up to the last
+    // frame (the newest frame is never superseded; a loaded machine may
+    // make the estimator skip one before it, which it then counts).
+    let until = deadline(60.0);
+    let mut seen = Vec::new();
+    let mut dropped = 0;
+    while seen.last() != Some(&(frames as u64 - 1)) {
+        let Some(e) = next_json(&estimates, until) else {
+            break;
+        };
+        assert_eq!(e["schema"], "slope.estimate.json/1", "{e}");
+        assert_eq!(e["status"], "ok", "{e}");
+        let slope = e["slope_deg"].as_f64().expect("slope_deg");
+        assert!((slope - 16.0).abs() < 1.0, "{e}");
+        dropped = e["dropped_frames"].as_u64().expect("dropped_frames");
+        seen.push(e["frame"].as_u64().expect("frame"));
+    }
+    assert_eq!(
+        seen.last(),
+        Some(&(frames as u64 - 1)),
+        "{}",
+        bridge.diagnostics()
+    );
+    assert!(seen.windows(2).all(|w| w[0] < w[1]), "{seen:?}");
+    assert_eq!(seen.len() as u64 + dropped, frames as u64, "{seen:?}");
+    replay.assert_exits_zero_within(Duration::from_secs(30));
+    bridge.signal(nix::sys::signal::Signal::SIGTERM);
+    bridge.assert_exits_zero_within(Duration::from_secs(5));
+}
