@@ -210,6 +210,22 @@ impl CosineKmeans {
             .map(|(u, _)| u)
     }
 
+    /// For each vector of `normals` (the slice given to the last
+    /// [`Self::cluster`] call, which returned `clustering`), in order:
+    /// whether it belongs to a kept cluster (`false` for one the clustering
+    /// ignored: not finite or zero).
+    pub fn kept_flags<'a>(
+        &'a self,
+        normals: &'a [Vector3<f64>],
+        clustering: &'a Clustering,
+    ) -> impl Iterator<Item = bool> + 'a {
+        let mut labels = self.labels.iter();
+        normals.iter().map(move |n| {
+            let usable = n.iter().all(|c| c.is_finite()) && n.try_normalize(1e-12).is_some();
+            usable && labels.next().is_some_and(|l| clustering.kept.contains(l))
+        })
+    }
+
     fn load_f32(&mut self) {
         self.ux.clear();
         self.uy.clear();

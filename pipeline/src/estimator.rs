@@ -154,6 +154,44 @@ impl Stopwatch {
     }
 }
 
+/// One normal the paper method sampled, for pictures and exports.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InspectedNormal {
+    /// The pixel (row-major index) the normal was computed at.
+    pub pixel: u32,
+    /// Unit normal, camera frame.
+    pub normal: [f32; 3],
+    /// True when the cosine k-means kept it (its cluster is the dominant
+    /// one or merged into it).
+    pub kept: bool,
+    /// True on the inclined plane, false on the ground.
+    pub inclined: bool,
+}
+
+/// What the estimator saw in its last frame: every segmented plane, the
+/// roles the selection gave them, and the normals the paper method sampled
+/// (kept only with [`Estimator::set_inspect`], which costs a copy of the
+/// normals per frame).
+#[derive(Debug, Clone, Copy)]
+pub struct Inspection<'a> {
+    /// Every plane RANSAC segmented, in the order found.
+    pub planes: &'a [SegmentedPlane],
+    /// Indices into `planes` of the ground's segments (empty without a
+    /// measured ground).
+    pub ground: &'a [usize],
+    /// Index into `planes` of the inclined plane.
+    pub inclined: Option<usize>,
+    /// The paper method's sampled normals, inclined plane first.
+    pub normals: &'a [InspectedNormal],
+}
+
+/// The selection's roles, kept for [`Inspection`].
+#[derive(Debug, Clone, Default)]
+struct Roles {
+    ground: Vec<usize>,
+    inclined: Option<usize>,
+}
+
 /// The slope estimator. Owns every buffer the stages reuse from frame to
 /// frame.
 #[derive(Debug, Clone)]
@@ -167,6 +205,7 @@ pub struct Estimator {
     ground_pixels: Vec<u32>,
     paper: PaperStages,
     tracker: SlopeTracker,
+    roles: Roles,
 }
 
 impl Estimator {
@@ -180,6 +219,26 @@ impl Estimator {
             ground_pixels: Vec::new(),
             paper: PaperStages::default(),
             tracker: SlopeTracker::new(),
+            roles: Roles::default(),
+        }
+    }
+
+    /// Keeps the paper method's sampled normals of each frame for
+    /// [`Self::inspection`] (off by default: the daemon needs none).
+    pub fn set_inspect(&mut self, on: bool) {
+        self.paper.inspected = on.then(Vec::new);
+    }
+
+    /// What the last frame's stages saw. Planes and roles are always
+    /// there; the normals only with [`Self::set_inspect`]. After a frame
+    /// that failed early (bad frame, too few points) the planes may be
+    /// those of an earlier frame and the roles are empty.
+    pub fn inspection(&self) -> Inspection<'_> {
+        Inspection {
+            planes: self.segmenter.planes(),
+            ground: &self.roles.ground,
+            inclined: self.roles.inclined,
+            normals: self.paper.inspected.as_deref().unwrap_or(&[]),
         }
     }
 
@@ -240,6 +299,11 @@ impl Estimator {
         }
         let mut rng = ChaCha8Rng::seed_from_u64(self.config.seed);
         rng.set_stream(frame_index);
+        self.roles.ground.clear();
+        self.roles.inclined = None;
+        if let Some(seen) = &mut self.paper.inspected {
+            seen.clear();
+        }
         self.remove_outliers(cloud)?;
         clock.lap("outlier");
         self.segmenter
@@ -261,6 +325,10 @@ impl Estimator {
             Some(Ok(selection)) => selection,
             Some(Err(ground)) => return Ok(self.ground_only(ground)),
         };
+        if let Ground::Planes(members) = &selection.ground {
+            self.roles.ground.extend_from_slice(members);
+        }
+        self.roles.inclined = Some(selection.inclined);
         let planes = self.segmenter.planes();
         let inclined = PlaneSegment::of(
             &planes[selection.inclined],
@@ -325,6 +393,7 @@ impl Estimator {
     fn ground_only(&mut self, ground: Ground) -> Estimate {
         let mut estimate = Estimate::failed(EstimateStatus::NoInclinedPlane, self.config.method);
         if let Ground::Planes(members) = ground {
+            self.roles.ground.extend_from_slice(&members);
             let segment = PlaneSegment::joined(
                 self.segmenter.planes(),
                 &self.summaries,
@@ -369,6 +438,8 @@ struct PaperStages {
     kmeans: CosineKmeans,
     ground_normals: Vec<Vector3<f64>>,
     inclined_normals: Vec<Vector3<f64>>,
+    /// The sampled normals of the frame, when inspecting.
+    inspected: Option<Vec<InspectedNormal>>,
 }
 
 impl PaperStages {
@@ -462,6 +533,19 @@ impl PaperStages {
             config.kmeans.max_iterations,
             config.kmeans.merge_spread_ratio,
         );
+        if let (Some(seen), Some(c)) = (&mut self.inspected, &clustering) {
+            let flags = self.kmeans.kept_flags(found, c);
+            for ((&pixel, n), kept) in members.iter().zip(found).zip(flags) {
+                if n.iter().all(|x| x.is_finite()) {
+                    seen.push(InspectedNormal {
+                        pixel,
+                        normal: [n.x as f32, n.y as f32, n.z as f32],
+                        kept,
+                        inclined,
+                    });
+                }
+            }
+        }
         let result = clustering.and_then(|c| {
             out.extend(self.kmeans.kept_members(&c).copied());
             out.iter().sum::<Vector3<f64>>().try_normalize(1e-12)

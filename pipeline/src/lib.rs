@@ -48,6 +48,8 @@ pub use config::{
     parse_method, ConfigError, CumulativeConfig, EstimatorConfig, KmeansConfig, NormalsConfig,
     OutlierConfig, PassThroughConfig, RansacConfig, SelectionConfig, TrackingConfig,
 };
-pub use estimator::{Estimate, Estimator, FrameInfo, PlaneEstimate, StageTimings};
+pub use estimator::{
+    Estimate, Estimator, FrameInfo, InspectedNormal, Inspection, PlaneEstimate, StageTimings,
+};
 pub use sensor_noise::NoiseModel;
 pub use slope_ipc_types::{EstimateStatus, SlopeMethod};

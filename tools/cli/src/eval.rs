@@ -28,7 +28,7 @@ use clap::Parser;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
-use slope_ipc_types::{CloudPoint, EstimateStatus, Mount, SlopeMethod, DEFAULT_SERVICE_PREFIX};
+use slope_ipc_types::{CloudPoint, EstimateStatus, SlopeMethod, DEFAULT_SERVICE_PREFIX};
 use slope_pipeline::tracking::TrackedSlope;
 use slope_pipeline::{
     CloudView, Estimate, Estimator, EstimatorConfig, FrameInfo, PlaneEstimate, StageTimings,
@@ -38,11 +38,8 @@ use slope_sensor::recording::{DepthImage, FrameEntry, Recording};
 use crate::cli::CommonArgs;
 use crate::demo::median;
 use crate::estimator::{load_config, method_arg};
-use crate::render::{mount_ground_plane, render_planes, write_png, PlaneOverlay};
-use crate::replay::positive_f64;
-
-/// Default distance from a plane within which `--render` tints a pixel.
-pub const DEFAULT_RENDER_TOLERANCE_M: f64 = 0.03;
+use crate::eval_artifacts::{Artifacts, Snapshot};
+use crate::plot::write_recording_plot;
 
 /// An `ok` frame whose confidence is below this counts as low-confidence in
 /// the summary.
@@ -74,7 +71,9 @@ evaluated, and the exit status is non-zero.",
   slope-eval tests/recordings/* --method all               # the three methods side by side
   slope-eval REC --json | jq .summary                      # one JSON object per recording and method
   slope-eval REC --config estimator.toml --seed 7          # parameters from a file, another seed
-  slope-eval REC --render out/ --render-frame 12           # PNG: ground red, inclined plane blue"
+  slope-eval REC --render out/ --render-frame 12           # overlay PNG of frame 12
+  slope-eval REC --render out/ --render-every 10 --export-ply out/   # every 10th frame, PNG and PLY
+  slope-eval REC --method all --plot out/                  # slope and time over the frames"
 )]
 pub struct EvalArgs {
     /// Recording directories (each holds recording.toml and frames.csv).
@@ -105,19 +104,32 @@ pub struct EvalArgs {
     #[arg(long)]
     pub json: bool,
 
-    /// Write, per recording and method, a PNG of one frame into DIR: depth in
-    /// grey, pixels near the ground plane red, near the inclined plane blue.
+    /// Write, per recording and method, an overlay PNG of a frame into DIR:
+    /// every segmented plane in its own colour (ground red, inclined plane
+    /// blue, labelled), the paper method's normals (kept green, dropped
+    /// yellow) and a caption with slope, spread, confidence and status.
     #[arg(long, value_name = "DIR")]
     pub render: Option<PathBuf>,
 
-    /// The frame to render (its index in frames.csv); default: the middle
-    /// one of the evaluated frames.
-    #[arg(long, value_name = "INDEX", requires = "render")]
+    /// The frame to render and export (its index in frames.csv); default:
+    /// the middle one of the evaluated frames.
+    #[arg(long, value_name = "INDEX", conflicts_with = "render_every")]
     pub render_frame: Option<u64>,
 
-    /// Pixels within this distance of a plane are tinted, metres.
-    #[arg(long, default_value_t = DEFAULT_RENDER_TOLERANCE_M, value_parser = positive_f64)]
-    pub render_tolerance_m: f64,
+    /// Render and export every Nth evaluated frame (the first, the N+1th,
+    /// ...) instead of one.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    pub render_every: Option<u64>,
+
+    /// Write the cloud of the rendered frame(s) as PLY into DIR (plane
+    /// label, role and normal per point; CloudCompare, MeshLab, Open3D).
+    #[arg(long, value_name = "DIR")]
+    pub export_ply: Option<PathBuf>,
+
+    /// Write one PNG per recording into DIR: each method's per-frame slope,
+    /// the tracked slope and the truth, and the time per frame.
+    #[arg(long, value_name = "DIR")]
+    pub plot: Option<PathBuf>,
 
     /// More log output (-v debug, -vv trace). RUST_LOG overrides.
     #[arg(short, long, action = clap::ArgAction::Count)]
@@ -489,21 +501,21 @@ impl EvalOutcome {
     }
 }
 
-/// The frame kept for `--render`: its cloud and each method's estimate.
-struct RenderFrame {
-    index: u64,
-    points: Vec<CloudPoint>,
-    estimates: Vec<Estimate>,
-}
-
 /// Evaluates every recording of `args`, printing each report as it is done
 /// (table or JSON lines on stdout). Failures are logged and collected, not
 /// returned: call [`EvalOutcome::check`] for the exit status.
 pub fn run(args: &EvalArgs) -> anyhow::Result<EvalOutcome> {
     let configs = configs(args)?;
-    if let Some(dir) = &args.render {
+    let artifacts = Artifacts {
+        render_dir: args.render.clone(),
+        ply_dir: args.export_ply.clone(),
+        frame: args.render_frame,
+        every: args.render_every,
+    };
+    artifacts.prepare()?;
+    if let Some(dir) = &args.plot {
         std::fs::create_dir_all(dir)
-            .with_context(|| format!("cannot create the render directory {}", dir.display()))?;
+            .with_context(|| format!("cannot create the plot directory {}", dir.display()))?;
     }
     let mut outcome = EvalOutcome::default();
     let mut opened = Vec::new();
@@ -552,11 +564,7 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<EvalOutcome> {
         let label = path.display().to_string();
         bar.set_prefix(short_name(path));
         let frames = &recording.frames()[..frame_limit(recording)];
-        let render_index = match (&args.render, args.render_frame) {
-            (None, _) => None,
-            (Some(_), Some(index)) => Some(index),
-            (Some(_), None) => frames.get(frames.len() / 2).map(|f| f.index),
-        };
+        let name = render_names.claim(path);
         // Fresh estimators: the tracked slope follows this recording only.
         // Flatness is judged against this recording's sensor unless configured.
         let sensor = &recording.meta().sensor;
@@ -564,14 +572,23 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<EvalOutcome> {
             .iter()
             .map(|c| Estimator::new(c.clone().for_sensor(sensor)))
             .collect();
-        let (reports, kept) = evaluate_recording(
-            recording,
-            &label,
-            frames,
-            &mut estimators,
-            render_index,
-            &bar,
-        );
+        for estimator in &mut estimators {
+            estimator.set_inspect(artifacts.enabled());
+        }
+        let target = ArtifactTarget {
+            artifacts: &artifacts,
+            name: &name,
+        };
+        let (reports, failures) =
+            evaluate_recording(recording, &label, frames, &mut estimators, &target, &bar);
+        outcome.failures.extend(failures);
+        if let Some(frame) = args.render_frame {
+            if artifacts.enabled() && !frames.iter().any(|f| f.index == frame) {
+                outcome.failures.push(format!(
+                    "cannot render frame {frame} of {label}: no such frame was evaluated"
+                ));
+            }
+        }
         for report in &reports {
             let text = if args.json {
                 serde_json::to_string(report).context("cannot format the report as JSON")?
@@ -584,19 +601,11 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<EvalOutcome> {
                 return Ok(outcome);
             }
         }
-        if let (Some(dir), Some(index)) = (&args.render, render_index) {
-            let name = render_names.claim(path);
-            let evaluated = frames.iter().any(|f| f.index == index);
-            let target = RenderTarget {
-                dir,
-                name: &name,
-                index,
-                evaluated,
-                tolerance_m: args.render_tolerance_m,
-            };
-            // Suspended: `render` logs each file it writes.
-            if let Err(err) = bar.suspend(|| render(&target, kept, recording, &label)) {
-                outcome.failures.push(format!("{err:#}"));
+        if let Some(dir) = &args.plot {
+            let path = dir.join(format!("{name}-plot.png"));
+            match bar.suspend(|| write_recording_plot(&path, &label, &reports)) {
+                Ok(()) => bar.suspend(|| tracing::info!(path = %path.display(), "plotted")),
+                Err(err) => outcome.failures.push(format!("{err:#}")),
             }
         }
         outcome.reports.extend(reports);
@@ -625,18 +634,19 @@ fn evaluate_recording(
     label: &str,
     frames: &[FrameEntry],
     estimators: &mut [Estimator],
-    render_index: Option<u64>,
+    target: &ArtifactTarget<'_>,
     bar: &ProgressBar,
-) -> (Vec<MethodReport>, Option<RenderFrame>) {
+) -> (Vec<MethodReport>, Vec<String>) {
     let projector = recording.projector();
     let mut depth = DepthImage::default();
     let mut points = vec![CloudPoint::INVALID; projector.len()];
     let mut results: Vec<Vec<FrameResult>> =
         vec![Vec::with_capacity(frames.len()); estimators.len()];
-    let mut render = None;
+    let mut failures = Vec::new();
     let meta = recording.meta();
     let (width, height) = (meta.depth.width as usize, meta.depth.height as usize);
-    for frame in frames {
+    for (position, frame) in frames.iter().enumerate() {
+        let wanted = target.artifacts.wants(position, frame.index, frames.len());
         let truth_deg = recording.truth_deg(frame);
         match recording.read_depth_into(frame, &mut depth) {
             Err(err) => {
@@ -672,7 +682,6 @@ fn evaluate_recording(
                     index: frame.index,
                     stamp_ns: frame.timestamp_ns,
                 };
-                let mut kept = Vec::new();
                 for (estimator, per_method) in estimators.iter_mut().zip(&mut results) {
                     let estimate = estimator.estimate_frame(&view, info);
                     tracing::debug!(
@@ -685,17 +694,30 @@ fn evaluate_recording(
                         "estimated"
                     );
                     per_method.push(frame_result(frame.index, truth_deg, &estimate));
-                    if render_index == Some(frame.index) {
-                        kept.push(estimate);
+                    if wanted {
+                        let snapshot = Snapshot {
+                            recording: label,
+                            name: target.name,
+                            index: frame.index,
+                            points: &points,
+                            width: meta.depth.width,
+                            height: meta.depth.height,
+                            estimate: &estimate,
+                            inspection: estimator.inspection(),
+                            truth_deg,
+                        };
+                        match bar.suspend(|| target.artifacts.write(&snapshot)) {
+                            Ok(paths) => {
+                                for path in paths {
+                                    bar.suspend(
+                                        || tracing::info!(path = %path.display(), "written"),
+                                    );
+                                }
+                            }
+                            Err(err) => failures.push(format!("{err:#}")),
+                        }
                     }
                     bar.inc(1);
-                }
-                if render_index == Some(frame.index) {
-                    render = Some(RenderFrame {
-                        index: frame.index,
-                        points: points.clone(),
-                        estimates: kept,
-                    });
                 }
             }
         }
@@ -707,60 +729,14 @@ fn evaluate_recording(
             MethodReport::new(label.to_string(), estimator.config().method, estimates)
         })
         .collect();
-    (reports, render)
+    (reports, failures)
 }
 
-/// Where and what `--render` draws for one recording.
-struct RenderTarget<'a> {
-    dir: &'a Path,
-    /// File-name stem.
+/// Where one recording's pictures and clouds go.
+struct ArtifactTarget<'a> {
+    artifacts: &'a Artifacts,
+    /// File-name stem of the recording.
     name: &'a str,
-    /// The frame index asked for.
-    index: u64,
-    /// Whether that frame was among the evaluated ones.
-    evaluated: bool,
-    tolerance_m: f64,
-}
-
-/// Writes one PNG per method of the kept frame into the target directory.
-fn render(
-    target: &RenderTarget<'_>,
-    frame: Option<RenderFrame>,
-    recording: &Recording,
-    label: &str,
-) -> anyhow::Result<()> {
-    let index = target.index;
-    let Some(frame) = frame else {
-        if target.evaluated {
-            bail!("cannot render frame {index} of {label}: its depth image could not be read");
-        }
-        bail!("cannot render frame {index} of {label}: no such frame was evaluated");
-    };
-    let meta = recording.meta();
-    let mount: Mount = recording.mount();
-    for estimate in &frame.estimates {
-        let ground = match (estimate.ground, estimate.ground_from_mount) {
-            (Some(plane), _) => Some(plane.coefficients),
-            (None, true) => mount_ground_plane(&mount),
-            (None, false) => None,
-        };
-        let overlay = PlaneOverlay {
-            ground,
-            inclined: estimate.inclined.map(|p| p.coefficients),
-            tolerance_m: target.tolerance_m,
-        };
-        let image = render_planes(&frame.points, meta.depth.width, meta.depth.height, &overlay);
-        let path = target.dir.join(format!(
-            "{}-{}-frame{:06}.png",
-            target.name,
-            estimate.method.name(),
-            frame.index
-        ));
-        write_png(&path, &image)
-            .with_context(|| format!("cannot render frame {index} of {label}"))?;
-        tracing::info!(path = %path.display(), status = estimate.status.name(), "rendered");
-    }
-    Ok(())
 }
 
 /// File-name stems for rendered pictures: the recording's directory name,

@@ -96,6 +96,25 @@ pub fn render_planes(
     image
 }
 
+/// The depth of each of the `width * height` points as grey (near bright,
+/// far dark, no reading black), row-major.
+pub fn grey_levels(points: &[CloudPoint], width: u32, height: u32) -> Vec<[u8; 3]> {
+    let n = width as usize * height as usize;
+    let mut out = vec![[0u8; 3]; n];
+    let Some((near_m, far_m)) = depth_range(points) else {
+        return out;
+    };
+    let span_m = (far_m - near_m).max(1e-6);
+    for (pixel, point) in out.iter_mut().zip(points) {
+        if point.is_valid() {
+            let t = ((point.z_m - near_m) / span_m).clamp(0.0, 1.0);
+            let grey = f32::from(NEAR_GREY) + t * (f32::from(FAR_GREY) - f32::from(NEAR_GREY));
+            *pixel = [to_u8(grey); 3];
+        }
+    }
+    out
+}
+
 /// Writes `image` as an 8-bit RGB PNG.
 pub fn write_png(path: &Path, image: &ColorImage) -> anyhow::Result<()> {
     let file = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;

@@ -604,8 +604,11 @@ fn read_rgb(path: &Path) -> (u32, u32, Vec<[u8; 3]>) {
     (info.width, info.height, pixels)
 }
 
+/// Overlay pixels are drawn at this many times the depth resolution.
+const OVERLAY_SCALE: u32 = 2;
+
 #[test]
-fn render_tints_the_ground_red_and_the_ramp_blue() {
+fn the_overlay_colours_the_ground_red_and_the_ramp_blue() {
     let dir = tempfile::tempdir().unwrap();
     let rec = write_recording(&dir.path().join("ramp"), &[20.0; 3], Truth::Recording(20.0));
     let out_dir = dir.path().join("pictures");
@@ -619,30 +622,41 @@ fn render_tints_the_ground_red_and_the_ramp_blue() {
     ]);
     assert!(out.success, "{}", out.stderr);
     for method in ["paper", "least-squares", "tls"] {
-        // The middle of three frames.
+        // The middle of three frames: the picture at twice the depth
+        // resolution, the caption under it.
         let path = out_dir.join(format!("ramp-{method}-frame000001.png"));
         let (width, height, pixels) = read_rgb(&path);
-        assert_eq!((width, height), (WIDTH, HEIGHT));
-        if method != "tls" {
-            continue;
-        }
-        // TLS on exact planes: every pixel is tinted after what it sees.
+        assert_eq!(width, OVERLAY_SCALE * WIDTH);
+        assert!(height > OVERLAY_SCALE * HEIGHT + 40, "{height}");
+        // Every pixel coloured after the plane RANSAC gave it; labels and
+        // normal dots lie on their planes. The ground is near and every pixel
+        // of it an inlier; the far end of the ramp (beyond 5 m, where the
+        // pixels are sparse) is partly dropped as outliers and stays grey,
+        // but no pixel of either surface takes the other's colour.
         let (mut ground, mut ramp, mut ground_red, mut ramp_blue, mut empty_black) =
             (0, 0, 0, 0, 0);
+        let mut crossed = 0;
         let mut empty = 0;
         for v in 0..HEIGHT {
             for u in 0..WIDTH {
-                let [r, g, b] = pixels[(v * WIDTH + u) as usize];
-                let red = i32::from(r) > i32::from(g) + 60 && g == b;
-                let blue = i32::from(b) > i32::from(r) + 60 && r == g;
+                let i = (v * OVERLAY_SCALE * width + u * OVERLAY_SCALE) as usize;
+                let [r, g, b] = pixels[i];
+                // The normal dots (green, yellow, black rims) and the white
+                // label text lie on their planes too.
+                let mark = [[40, 230, 60], [255, 220, 0], [0, 0, 0]].contains(&[r, g, b])
+                    || (r > 200 && g > 200 && b > 200);
+                let red = (i32::from(r) > i32::from(g) + 60 && g == b) || mark;
+                let blue = (i32::from(b) > i32::from(r) + 60 && r == g) || mark;
                 match ray_cast(u, v, 20.0) {
                     Some((Surface::Ground, _)) => {
                         ground += 1;
                         ground_red += usize::from(red);
+                        crossed += usize::from(blue && !mark);
                     }
                     Some((Surface::Ramp, _)) => {
                         ramp += 1;
                         ramp_blue += usize::from(blue);
+                        crossed += usize::from(red && !mark);
                     }
                     None => {
                         empty += 1;
@@ -653,11 +667,34 @@ fn render_tints_the_ground_red_and_the_ramp_blue() {
         }
         assert!(ground > 10_000 && ramp > 10_000, "{ground} {ramp}");
         assert!(
-            ground_red as f64 > 0.99 * ground as f64,
-            "{ground_red}/{ground}"
+            ground_red as f64 > 0.97 * ground as f64,
+            "{method}: {ground_red}/{ground}"
         );
-        assert!(ramp_blue as f64 > 0.99 * ramp as f64, "{ramp_blue}/{ramp}");
-        assert_eq!(empty_black, empty);
+        assert!(
+            ramp_blue as f64 > 0.8 * ramp as f64,
+            "{method}: {ramp_blue}/{ramp}"
+        );
+        // At most about a row of pixels along the junction line.
+        assert!(
+            crossed < 600,
+            "{method}: {crossed} pixels in the other plane's colour"
+        );
+        assert!(
+            empty_black as f64 >= 0.98 * empty as f64,
+            "{empty_black}/{empty}"
+        );
+        // The paper method's sampled normals are drawn as green dots (the
+        // caption's legend has a green square too: only the picture counts).
+        let picture = (OVERLAY_SCALE * HEIGHT * width) as usize;
+        let green = pixels[..picture]
+            .iter()
+            .filter(|p| **p == [40, 230, 60])
+            .count();
+        assert_eq!(
+            method == "paper",
+            green > 100,
+            "{method}: {green} green pixels"
+        );
     }
 }
 

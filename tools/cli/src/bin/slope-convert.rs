@@ -1,0 +1,13 @@
+//! `slope-convert`: a recording as an MCAP file.
+
+use std::process::ExitCode;
+
+use clap::Parser;
+use slope_tools::cli::exit_status;
+use slope_tools::convert::{run, ConvertArgs};
+
+fn main() -> ExitCode {
+    let args = ConvertArgs::parse();
+    args.init_logging();
+    exit_status(run(&args).map(drop))
+}

@@ -1,0 +1,147 @@
+//! `slope-convert RECORDING OUT.mcap`: a recording as an MCAP file that
+//! Foxglove opens: per frame the depth image, the cloud and the estimate
+//! (the estimator run in this process, as `slope-eval` does).
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use clap::Parser;
+use slope_ipc_types::{CloudPoint, SlopeEstimate, DEFAULT_SERVICE_PREFIX};
+use slope_pipeline::{CloudView, Estimator, FrameInfo};
+use slope_sensor::recording::{DepthImage, Recording};
+
+use crate::cli::CommonArgs;
+use crate::estimator::{load_config, method_arg};
+use crate::mcap_export::{McapExporter, McapFrame};
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "slope-convert",
+    version,
+    about = "Convert a recording into an MCAP file (Foxglove, ROS 2 tooling): depth, cloud, estimates",
+    long_about = "Writes OUT.mcap with, per frame of RECORDING, the depth image \
+(/slope/depth, foxglove.RawImage, 16UC1), the point cloud (/slope/cloud, foxglove.PointCloud: x, y, \
+z float32 and rgb) and the slope estimate (/slope/estimate, JSON with schema \
+slope.estimate.json/1: the keys of slope-echo --json), every channel JSON with a JSON Schema. \
+The estimates come from the estimator run here on each frame (--no-estimates leaves them out).",
+    after_help = "Examples:
+  slope-convert tests/recordings/ramp16 ramp16.mcap        # then open ramp16.mcap in Foxglove
+  slope-convert REC out.mcap --method tls --max-frames 10
+  slope-convert REC out.mcap --no-estimates               # depth and cloud only"
+)]
+pub struct ConvertArgs {
+    /// The recording directory (holds recording.toml and frames.csv).
+    pub recording: PathBuf,
+
+    /// The MCAP file to write (replaced if it exists).
+    pub output: PathBuf,
+
+    /// Fit used for the estimates: paper, least-squares or tls.
+    #[arg(long, value_parser = method_arg)]
+    pub method: Option<slope_ipc_types::SlopeMethod>,
+
+    /// TOML file with estimator parameters.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+
+    /// Convert at most this many frames (the first ones).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    pub max_frames: Option<u64>,
+
+    /// Leave the estimates out (depth and cloud only).
+    #[arg(long)]
+    pub no_estimates: bool,
+
+    /// More log output (-v debug, -vv trace). RUST_LOG overrides.
+    #[arg(short, long, action = clap::ArgAction::Count)]
+    pub verbose: u8,
+
+    /// Less log output (errors only).
+    #[arg(short, long, conflicts_with = "verbose")]
+    pub quiet: bool,
+}
+
+impl ConvertArgs {
+    pub fn init_logging(&self) {
+        CommonArgs {
+            service_prefix: DEFAULT_SERVICE_PREFIX.to_string(),
+            verbose: self.verbose,
+            quiet: self.quiet,
+        }
+        .init_logging();
+    }
+}
+
+/// What was written.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ConvertStats {
+    pub frames: u64,
+    pub estimates: u64,
+    pub bad_frames: u64,
+}
+
+pub fn run(args: &ConvertArgs) -> anyhow::Result<ConvertStats> {
+    let recording = Recording::open(&args.recording)
+        .with_context(|| format!("cannot convert {}", args.recording.display()))?;
+    let config =
+        load_config(args.config.as_ref(), args.method)?.for_sensor(&recording.meta().sensor);
+    let mut estimator = (!args.no_estimates).then(|| Estimator::new(config));
+    let meta = recording.meta();
+    let (width, height) = (meta.depth.width, meta.depth.height);
+    let unit_m = meta.depth.unit_m;
+    let projector = recording.projector();
+    let mut depth = DepthImage::default();
+    let mut points = vec![CloudPoint::INVALID; projector.len()];
+    let mut exporter = McapExporter::create(&args.output)?;
+    let limit = args.max_frames.map_or(usize::MAX, |m| m as usize);
+    let mut stats = ConvertStats::default();
+    for frame in recording.frames().iter().take(limit) {
+        if let Err(err) = recording.read_depth_into(frame, &mut depth) {
+            tracing::warn!(frame = frame.index, "skipping a bad frame: {err}");
+            stats.bad_frames += 1;
+            continue;
+        }
+        projector.project_into(&depth.data, None, &mut points);
+        let message = estimator.as_mut().map(|estimator| {
+            let view = CloudView {
+                points: &points,
+                width: width as usize,
+                height: height as usize,
+                intrinsics: recording.intrinsics(),
+                mount: recording.mount(),
+            };
+            let info = FrameInfo {
+                index: frame.index,
+                stamp_ns: frame.timestamp_ns,
+            };
+            let estimate = estimator.estimate_frame(&view, info);
+            let mut message = SlopeEstimate {
+                frame_index: frame.index,
+                capture_stamp_ns: frame.timestamp_ns,
+                ..SlopeEstimate::default()
+            };
+            estimate.write_message(&mut message);
+            message
+        });
+        exporter.write(&McapFrame {
+            stamp_ns: frame.timestamp_ns,
+            width,
+            height,
+            depth: &depth.data,
+            depth_unit_m: unit_m,
+            points: &points,
+            estimate: message.as_ref(),
+        })?;
+        stats.frames += 1;
+        stats.estimates += u64::from(message.is_some());
+    }
+    exporter.finish()?;
+    tracing::info!(
+        output = %args.output.display(),
+        frames = stats.frames,
+        estimates = stats.estimates,
+        bad_frames = stats.bad_frames,
+        "converted"
+    );
+    Ok(stats)
+}

@@ -1,0 +1,206 @@
+//! What `slope-eval` writes besides its report, frame by frame: the overlay
+//! picture (`--render`, `--render-every`) and the labelled cloud
+//! (`--export-ply`) of the frames asked for, each method separately.
+//!
+//! [`Snapshot`] is what one estimator saw of one frame; [`overlay_of`] and
+//! [`caption_lines`] are pure, [`Artifacts::write`] does the I/O.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use slope_ipc_types::{CloudPoint, EstimateStatus};
+use slope_pipeline::{Estimate, Inspection};
+use slope_sensor::recording::ColorImage;
+
+use crate::overlay::{render_overlay, NormalDot, Overlay, Role};
+use crate::ply::{write_labelled_cloud, LabelledCloud};
+use crate::render::write_png;
+
+/// One estimator's view of one frame.
+#[derive(Debug, Clone, Copy)]
+pub struct Snapshot<'a> {
+    /// The recording as given on the command line.
+    pub recording: &'a str,
+    /// File-name stem for this recording.
+    pub name: &'a str,
+    /// The frame's index in frames.csv.
+    pub index: u64,
+    pub points: &'a [CloudPoint],
+    pub width: u32,
+    pub height: u32,
+    pub estimate: &'a Estimate,
+    pub inspection: Inspection<'a>,
+    pub truth_deg: Option<f64>,
+}
+
+impl Snapshot<'_> {
+    /// The role of segmented plane `k`.
+    pub fn role(&self, k: usize) -> Role {
+        if self.inspection.inclined == Some(k) {
+            Role::Inclined
+        } else if self.inspection.ground.contains(&k) {
+            Role::Ground
+        } else {
+            Role::Other
+        }
+    }
+
+    /// The file name of an artifact with `extension`.
+    fn file_name(&self, extension: &str) -> String {
+        format!(
+            "{}-{}-frame{:06}.{extension}",
+            self.name,
+            self.estimate.method.name(),
+            self.index
+        )
+    }
+}
+
+/// The caption of a snapshot's overlay: what, then the result.
+pub fn caption_lines(s: &Snapshot<'_>) -> Vec<String> {
+    let e = s.estimate;
+    let mut lines = vec![format!(
+        "{} · frame {} · {} · {}",
+        s.recording,
+        s.index,
+        e.method.name(),
+        e.status.name()
+    )];
+    let truth = s
+        .truth_deg
+        .map(|t| format!(" · truth {t:.1}°"))
+        .unwrap_or_default();
+    if e.status == EstimateStatus::Ok {
+        let spread = if e.slope_std_deg.is_finite() {
+            format!(" ± {:.2}°", e.slope_std_deg)
+        } else {
+            String::new()
+        };
+        let reasons: Vec<_> = slope_ipc_types::confidence::names(e.confidence_reasons).collect();
+        let reasons = if reasons.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", reasons.join(", "))
+        };
+        let tracked = e
+            .tracked
+            .as_ref()
+            .filter(|t| t.slope_deg.is_finite())
+            .map(|t| format!(" · tracked {:+.2}°", t.slope_deg))
+            .unwrap_or_default();
+        lines.push(format!(
+            "slope {:+.2}°{spread} · confidence {:.2}{reasons}{tracked}{truth}",
+            e.slope_deg, e.confidence
+        ));
+    } else {
+        let ground = e
+            .ground
+            .as_ref()
+            .map(|g| format!(" · ground {:.2} m below", g.coefficients[3]))
+            .unwrap_or_default();
+        lines.push(format!("no slope: {}{ground}{truth}", e.status.name()));
+    }
+    lines
+}
+
+/// The overlay picture of a snapshot.
+pub fn overlay_of(s: &Snapshot<'_>) -> ColorImage {
+    let dots: Vec<NormalDot> = s
+        .inspection
+        .normals
+        .iter()
+        .map(|n| NormalDot {
+            pixel: n.pixel,
+            kept: n.kept,
+        })
+        .collect();
+    let planes = s
+        .inspection
+        .planes
+        .iter()
+        .enumerate()
+        .map(|(k, p)| (p.inliers.as_slice(), s.role(k)))
+        .collect();
+    render_overlay(&Overlay {
+        points: s.points,
+        width: s.width,
+        height: s.height,
+        planes,
+        normals: &dots,
+        caption: caption_lines(s),
+    })
+}
+
+/// Which frames get pictures and clouds, and where they go.
+#[derive(Debug, Clone, Default)]
+pub struct Artifacts {
+    /// `--render DIR`.
+    pub render_dir: Option<PathBuf>,
+    /// `--export-ply DIR`.
+    pub ply_dir: Option<PathBuf>,
+    /// `--render-frame`: this frame only.
+    pub frame: Option<u64>,
+    /// `--render-every N`: every Nth evaluated frame (from the first).
+    pub every: Option<u64>,
+}
+
+impl Artifacts {
+    /// True when anything is written at all (the estimators then keep
+    /// their sampled normals).
+    pub fn enabled(&self) -> bool {
+        self.render_dir.is_some() || self.ply_dir.is_some()
+    }
+
+    /// Whether the frame at `position` among the evaluated frames (index
+    /// `index` in frames.csv, `count` frames evaluated) is written. Without
+    /// `--render-frame` or `--render-every`: the middle one.
+    pub fn wants(&self, position: usize, index: u64, count: usize) -> bool {
+        if !self.enabled() {
+            return false;
+        }
+        match (self.frame, self.every) {
+            (Some(frame), _) => index == frame,
+            (None, Some(every)) => (position as u64).is_multiple_of(every.max(1)),
+            (None, None) => position == count / 2,
+        }
+    }
+
+    /// Creates the output directories.
+    pub fn prepare(&self) -> anyhow::Result<()> {
+        for dir in [&self.render_dir, &self.ply_dir].into_iter().flatten() {
+            std::fs::create_dir_all(dir)
+                .with_context(|| format!("cannot create the directory {}", dir.display()))?;
+        }
+        Ok(())
+    }
+
+    /// Writes the snapshot's overlay and cloud; returns the files written.
+    pub fn write(&self, s: &Snapshot<'_>) -> anyhow::Result<Vec<PathBuf>> {
+        let mut written = Vec::new();
+        if let Some(dir) = &self.render_dir {
+            let path = dir.join(s.file_name("png"));
+            write_png(&path, &overlay_of(s))
+                .with_context(|| format!("cannot render frame {} of {}", s.index, s.recording))?;
+            written.push(path);
+        }
+        if let Some(dir) = &self.ply_dir {
+            let path = dir.join(s.file_name("ply"));
+            write_ply(&path, s)?;
+            written.push(path);
+        }
+        Ok(written)
+    }
+}
+
+/// The cloud of a snapshot with each point's plane, role and normal.
+fn write_ply(path: &Path, s: &Snapshot<'_>) -> anyhow::Result<()> {
+    let roles: Vec<Role> = (0..s.inspection.planes.len()).map(|k| s.role(k)).collect();
+    let cloud = LabelledCloud {
+        points: s.points,
+        planes: s.inspection.planes,
+        roles: &roles,
+        normals: s.inspection.normals,
+    };
+    write_labelled_cloud(path, &cloud)
+        .with_context(|| format!("cannot export frame {} of {}", s.index, s.recording))
+}

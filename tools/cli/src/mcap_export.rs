@@ -1,0 +1,254 @@
+//! MCAP files (the log format of Foxglove and ROS 2 bags), written with the
+//! `mcap` crate: per frame the depth image as `foxglove.RawImage`, the
+//! cloud as `foxglove.PointCloud` and, when there is one, the estimate as
+//! JSON (`slope.estimate.json/1`, the keys of `slope-echo --json`). Every
+//! channel is JSON-encoded with a JSON Schema (Foxglove's own schemas for
+//! its types, bytes as base64), so Foxglove opens the file as it is.
+//!
+//! | topic | schema | per frame |
+//! |---|---|---|
+//! | `/slope/depth` | `foxglove.RawImage` (`16UC1`, millimetres) | always |
+//! | `/slope/cloud` | `foxglove.PointCloud` (x y z float32, rgb packed uint32) | always |
+//! | `/slope/estimate` | `slope.estimate.json/1` | when estimated |
+
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::Path;
+
+use anyhow::Context;
+use base64::Engine;
+use serde_json::json;
+use slope_ipc_types::{CloudPoint, SlopeEstimate};
+
+use crate::echo::EstimateJson;
+
+pub const DEPTH_TOPIC: &str = "/slope/depth";
+pub const CLOUD_TOPIC: &str = "/slope/cloud";
+pub const ESTIMATE_TOPIC: &str = "/slope/estimate";
+/// The camera's frame id in every message.
+pub const FRAME_ID: &str = "slope_camera";
+/// `schema` of the estimate messages.
+pub const ESTIMATE_SCHEMA: &str = "slope.estimate.json/1";
+
+const TIME_SCHEMA: &str = r#"{"type":"object","properties":{"sec":{"type":"integer","minimum":0},"nsec":{"type":"integer","minimum":0}}}"#;
+
+/// Foxglove's `foxglove.RawImage` as JSON Schema.
+fn raw_image_schema() -> String {
+    json!({
+        "title": "foxglove.RawImage",
+        "description": "A raw image",
+        "type": "object",
+        "properties": {
+            "timestamp": serde_json::from_str::<serde_json::Value>(TIME_SCHEMA).unwrap_or_default(),
+            "frame_id": {"type": "string"},
+            "width": {"type": "integer", "minimum": 0},
+            "height": {"type": "integer", "minimum": 0},
+            "encoding": {"type": "string"},
+            "step": {"type": "integer", "minimum": 0},
+            "data": {"type": "string", "contentEncoding": "base64"}
+        }
+    })
+    .to_string()
+}
+
+/// Foxglove's `foxglove.PointCloud` as JSON Schema.
+fn point_cloud_schema() -> String {
+    let vector = json!({"type": "object", "properties": {
+        "x": {"type": "number"}, "y": {"type": "number"}, "z": {"type": "number"}}});
+    let quaternion = json!({"type": "object", "properties": {
+        "x": {"type": "number"}, "y": {"type": "number"}, "z": {"type": "number"},
+        "w": {"type": "number"}}});
+    json!({
+        "title": "foxglove.PointCloud",
+        "description": "A collection of N-dimensional points",
+        "type": "object",
+        "properties": {
+            "timestamp": serde_json::from_str::<serde_json::Value>(TIME_SCHEMA).unwrap_or_default(),
+            "frame_id": {"type": "string"},
+            "pose": {"type": "object", "properties": {"position": vector, "orientation": quaternion}},
+            "point_stride": {"type": "integer", "minimum": 0},
+            "fields": {"type": "array", "items": {"type": "object", "properties": {
+                "name": {"type": "string"},
+                "offset": {"type": "integer", "minimum": 0},
+                "type": {"type": "integer", "description": "foxglove.NumericType: 1 UINT8, 2 INT8, 3 UINT16, 4 INT16, 5 UINT32, 6 INT32, 7 FLOAT32, 8 FLOAT64"}
+            }}},
+            "data": {"type": "string", "contentEncoding": "base64"}
+        }
+    })
+    .to_string()
+}
+
+/// The estimate's JSON Schema: an object with `schema` and the keys of
+/// `slope-echo --json` (documented in tools/cli/README.md).
+fn estimate_schema() -> String {
+    let number = json!({"type": ["number", "null"]});
+    let plane = json!({"type": ["array", "null"], "items": {"type": "number"}});
+    json!({
+        "title": ESTIMATE_SCHEMA,
+        "description": "One slope estimate: the keys of slope-echo --json",
+        "type": "object",
+        "properties": {
+            "schema": {"type": "string", "const": ESTIMATE_SCHEMA},
+            "frame": {"type": "integer"},
+            "timestamp_ns": {"type": "integer"},
+            "status": {"type": "string"},
+            "method": {"type": "string"},
+            "slope_deg": number, "std_deg": number, "distance_m": number,
+            "confidence": {"type": "number"},
+            "confidence_reasons": {"type": "array", "items": {"type": "string"}},
+            "tracked_slope_deg": number, "tracked_std_deg": number,
+            "ground_plane": plane, "inclined_plane": plane
+        },
+        "additionalProperties": true
+    })
+    .to_string()
+}
+
+/// `{"sec": .., "nsec": ..}` of a stamp in ns.
+fn time_json(stamp_ns: u64) -> serde_json::Value {
+    json!({"sec": stamp_ns / 1_000_000_000, "nsec": stamp_ns % 1_000_000_000})
+}
+
+/// One frame to write.
+#[derive(Debug, Clone, Copy)]
+pub struct McapFrame<'a> {
+    pub stamp_ns: u64,
+    pub width: u32,
+    pub height: u32,
+    /// Depth counts, row-major, and the metres per count.
+    pub depth: &'a [u16],
+    pub depth_unit_m: f64,
+    pub points: &'a [CloudPoint],
+    pub estimate: Option<&'a SlopeEstimate>,
+}
+
+/// An MCAP file being written.
+pub struct McapExporter {
+    writer: mcap::Writer<BufWriter<File>>,
+    depth: u16,
+    cloud: u16,
+    estimate: u16,
+    sequence: u32,
+    path: String,
+}
+
+impl McapExporter {
+    /// Creates `path` with the three channels.
+    pub fn create(path: &Path) -> anyhow::Result<Self> {
+        let name = path.display().to_string();
+        let file = File::create(path).with_context(|| format!("cannot create {name}"))?;
+        let mut writer = mcap::WriteOptions::new()
+            .compression(None)
+            .create(BufWriter::new(file))
+            .with_context(|| format!("cannot write {name}"))?;
+        let none = BTreeMap::new();
+        let mut channel = |schema: &str, data: String, topic: &str| -> anyhow::Result<u16> {
+            let id = writer
+                .add_schema(schema, "jsonschema", data.as_bytes())
+                .with_context(|| format!("cannot write the schema {schema} into {name}"))?;
+            writer
+                .add_channel(id, topic, "json", &none)
+                .with_context(|| format!("cannot write the channel {topic} into {name}"))
+        };
+        let depth = channel("foxglove.RawImage", raw_image_schema(), DEPTH_TOPIC)?;
+        let cloud = channel("foxglove.PointCloud", point_cloud_schema(), CLOUD_TOPIC)?;
+        let estimate = channel(ESTIMATE_SCHEMA, estimate_schema(), ESTIMATE_TOPIC)?;
+        Ok(Self {
+            writer,
+            depth,
+            cloud,
+            estimate,
+            sequence: 0,
+            path: name,
+        })
+    }
+
+    /// Writes one frame's messages.
+    pub fn write(&mut self, frame: &McapFrame<'_>) -> anyhow::Result<()> {
+        let b64 = base64::engine::general_purpose::STANDARD;
+        let stamp = time_json(frame.stamp_ns);
+        // 16UC1 is millimetres by convention: other units are converted.
+        let mm_per_count = frame.depth_unit_m * 1000.0;
+        let depth_bytes: Vec<u8> = frame
+            .depth
+            .iter()
+            .map(|&d| {
+                (f64::from(d) * mm_per_count)
+                    .round()
+                    .min(f64::from(u16::MAX)) as u16
+            })
+            .flat_map(u16::to_le_bytes)
+            .collect();
+        let image = json!({
+            "timestamp": stamp,
+            "frame_id": FRAME_ID,
+            "width": frame.width,
+            "height": frame.height,
+            "encoding": "16UC1",
+            "step": frame.width * 2,
+            "data": b64.encode(&depth_bytes),
+        });
+        self.put(self.depth, frame.stamp_ns, &image)?;
+
+        let mut cloud_bytes = Vec::with_capacity(frame.points.len() * 16);
+        for p in frame.points.iter().filter(|p| p.is_valid()) {
+            for v in [p.x_m, p.y_m, p.z_m] {
+                cloud_bytes.extend_from_slice(&v.to_le_bytes());
+            }
+            cloud_bytes.extend_from_slice(&p.rgb.to_le_bytes());
+        }
+        let cloud = json!({
+            "timestamp": stamp,
+            "frame_id": FRAME_ID,
+            "pose": {"position": {"x": 0, "y": 0, "z": 0},
+                     "orientation": {"x": 0, "y": 0, "z": 0, "w": 1}},
+            "point_stride": 16,
+            "fields": [
+                {"name": "x", "offset": 0, "type": 7},
+                {"name": "y", "offset": 4, "type": 7},
+                {"name": "z", "offset": 8, "type": 7},
+                {"name": "rgb", "offset": 12, "type": 5}
+            ],
+            "data": b64.encode(&cloud_bytes),
+        });
+        self.put(self.cloud, frame.stamp_ns, &cloud)?;
+
+        if let Some(estimate) = frame.estimate {
+            let mut value = serde_json::to_value(EstimateJson::from(estimate))
+                .context("cannot write an estimate as JSON")?;
+            if let Some(object) = value.as_object_mut() {
+                object.insert("schema".to_string(), json!(ESTIMATE_SCHEMA));
+            }
+            self.put(self.estimate, frame.stamp_ns, &value)?;
+        }
+        Ok(())
+    }
+
+    fn put(
+        &mut self,
+        channel: u16,
+        stamp_ns: u64,
+        value: &serde_json::Value,
+    ) -> anyhow::Result<()> {
+        let data = serde_json::to_vec(value).context("cannot write a message as JSON")?;
+        let header = mcap::records::MessageHeader {
+            channel_id: channel,
+            sequence: self.sequence,
+            log_time: stamp_ns,
+            publish_time: stamp_ns,
+        };
+        self.sequence = self.sequence.wrapping_add(1);
+        self.writer
+            .write_to_known_channel(&header, &data)
+            .with_context(|| format!("cannot write a message into {}", self.path))
+    }
+
+    /// Writes the summary and closes the file.
+    pub fn finish(mut self) -> anyhow::Result<()> {
+        self.writer
+            .finish()
+            .with_context(|| format!("cannot finish {}", self.path))?;
+        Ok(())
+    }
+}

@@ -1,0 +1,201 @@
+//! What `slope-eval` and `slope-convert` write besides numbers, read back
+//! with the same crates that wrote them: overlays every Nth frame, the PLY
+//! cloud (its label counts are the inlier counts the report gives), the
+//! plot over the frames, and the MCAP file (channels, schemas, one message
+//! per frame and topic).
+
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::BufReader;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use base64::Engine;
+use ply_rs_bw::parser::Parser;
+use ply_rs_bw::ply::{DefaultElement, Property};
+use serde_json::Value;
+
+const EVAL: &str = env!("CARGO_BIN_EXE_slope-eval");
+const CONVERT: &str = env!("CARGO_BIN_EXE_slope-convert");
+
+fn ramp16() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/recordings/ramp16")
+}
+
+fn run(bin: &str, args: &[&str]) -> String {
+    let out = Command::new(bin)
+        .args(args)
+        .env_remove("RUST_LOG")
+        .output()
+        .expect("run");
+    assert!(
+        out.status.success(),
+        "{bin} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).expect("utf-8")
+}
+
+fn png_size(path: &Path) -> (u32, u32, Vec<u8>) {
+    let decoder = png::Decoder::new(BufReader::new(File::open(path).expect("png")));
+    let mut reader = decoder.read_info().expect("png header");
+    let mut buf = vec![0; reader.output_buffer_size().expect("size")];
+    let info = reader.next_frame(&mut buf).expect("png data");
+    buf.truncate(info.buffer_size());
+    (info.width, info.height, buf)
+}
+
+#[test]
+fn every_nth_frame_gets_an_overlay_and_a_ply_that_match_the_report() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let (pictures, clouds, plots) = (
+        dir.path().join("png"),
+        dir.path().join("ply"),
+        dir.path().join("plot"),
+    );
+    let recording = ramp16();
+    let stdout = run(
+        EVAL,
+        &[
+            recording.to_str().expect("utf-8"),
+            "--max-frames",
+            "6",
+            "--render-every",
+            "3",
+            "--render",
+            pictures.to_str().expect("utf-8"),
+            "--export-ply",
+            clouds.to_str().expect("utf-8"),
+            "--plot",
+            plots.to_str().expect("utf-8"),
+            "--json",
+            "-q",
+        ],
+    );
+    let report: Value =
+        serde_json::from_str(stdout.lines().next().expect("a report")).expect("JSON");
+    let mut pngs: Vec<_> = std::fs::read_dir(&pictures)
+        .expect("png dir")
+        .flatten()
+        .map(|e| e.file_name())
+        .collect();
+    pngs.sort();
+    assert_eq!(
+        pngs,
+        [
+            "ramp16-paper-frame000000.png",
+            "ramp16-paper-frame000003.png"
+        ]
+    );
+    for index in [0u64, 3] {
+        let (w, h, _) = png_size(&pictures.join(format!("ramp16-paper-frame{index:06}.png")));
+        assert_eq!(w, 1024);
+        assert!(h > 848);
+        let estimate = &report["estimates"][index as usize];
+        assert_eq!(estimate["index"], index);
+        let path = clouds.join(format!("ramp16-paper-frame{index:06}.ply"));
+        let ply = Parser::<DefaultElement>::new()
+            .read_ply(&mut BufReader::new(File::open(&path).expect("ply")))
+            .expect("a readable PLY");
+        let vertices = &ply.payload["vertex"];
+        let mut roles = BTreeMap::new();
+        for v in vertices {
+            let Some(Property::UChar(role)) = v.get("role") else {
+                panic!("no role: {v:?}");
+            };
+            *roles.entry(*role).or_insert(0u64) += 1;
+            for key in ["x", "y", "z", "nx", "ny", "nz"] {
+                assert!(matches!(v.get(key), Some(Property::Float(_))), "{key}");
+            }
+        }
+        // Ground (1) and inclined (2) points are the inliers the report counts.
+        assert_eq!(
+            roles.get(&1).copied(),
+            estimate["ground_inliers"].as_u64(),
+            "{roles:?}"
+        );
+        assert_eq!(
+            roles.get(&2).copied(),
+            estimate["inclined_inliers"].as_u64(),
+            "{roles:?}"
+        );
+        assert!(vertices.len() > 150_000, "{}", vertices.len());
+    }
+    // The plot: one picture for the recording, with the paper method's
+    // colour in it.
+    let (w, h, rgb) = png_size(&plots.join("ramp16-plot.png"));
+    assert_eq!((w, h), (1100, 760));
+    let blue = rgb.chunks_exact(3).filter(|p| *p == [30, 90, 200]).count();
+    assert!(blue > 200, "{blue} pixels of the paper method's colour");
+}
+
+#[test]
+fn a_converted_recording_has_one_message_per_frame_and_topic() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("ramp16.mcap");
+    let recording = ramp16();
+    run(
+        CONVERT,
+        &[
+            recording.to_str().expect("utf-8"),
+            out.to_str().expect("utf-8"),
+            "--max-frames",
+            "4",
+            "-q",
+        ],
+    );
+    let bytes = std::fs::read(&out).expect("mcap file");
+    let mut per_topic: BTreeMap<String, Vec<Value>> = BTreeMap::new();
+    for message in mcap::MessageStream::new(&bytes).expect("an MCAP file") {
+        let message = message.expect("a message");
+        let channel = &message.channel;
+        assert_eq!(channel.message_encoding, "json");
+        let schema = channel.schema.as_ref().expect("a schema");
+        assert_eq!(schema.encoding, "jsonschema");
+        let expected = match channel.topic.as_str() {
+            "/slope/depth" => "foxglove.RawImage",
+            "/slope/cloud" => "foxglove.PointCloud",
+            "/slope/estimate" => "slope.estimate.json/1",
+            other => panic!("unexpected topic {other}"),
+        };
+        assert_eq!(schema.name, expected);
+        let value: Value = serde_json::from_slice(&message.data).expect("JSON message");
+        per_topic
+            .entry(channel.topic.clone())
+            .or_default()
+            .push(value);
+    }
+    for topic in ["/slope/depth", "/slope/cloud", "/slope/estimate"] {
+        assert_eq!(per_topic[topic].len(), 4, "{topic}");
+    }
+    let b64 = base64::engine::general_purpose::STANDARD;
+    let image = &per_topic["/slope/depth"][0];
+    assert_eq!(
+        (image["width"].as_u64(), image["height"].as_u64()),
+        (Some(512), Some(424))
+    );
+    assert_eq!(image["encoding"], "16UC1");
+    let depth = b64
+        .decode(image["data"].as_str().expect("data"))
+        .expect("base64");
+    assert_eq!(depth.len(), 512 * 424 * 2);
+    let cloud = &per_topic["/slope/cloud"][0];
+    let points = b64
+        .decode(cloud["data"].as_str().expect("data"))
+        .expect("base64");
+    let measured = depth.chunks_exact(2).filter(|d| d != &[0, 0]).count();
+    assert_eq!(
+        points.len(),
+        measured * 16,
+        "one 16-byte point per measured pixel"
+    );
+    for (k, e) in per_topic["/slope/estimate"].iter().enumerate() {
+        assert_eq!(e["schema"], "slope.estimate.json/1");
+        assert_eq!(e["frame"], k as u64);
+        assert_eq!(e["status"], "ok", "{e}");
+        assert!(
+            (e["slope_deg"].as_f64().expect("slope") - 16.0).abs() < 1.0,
+            "{e}"
+        );
+    }
+}
