@@ -70,3 +70,44 @@ fn a_streaming_demo_stops_cleanly_with_its_summary() {
         "no summary after the stop: {rest:?}"
     );
 }
+
+/// slope-demo stopped while it waits for its first estimate: status 0 and
+/// a summary of nothing. The signal comes as the demo announces the chain,
+/// before its children have started; the summary's "0 estimates" shows it
+/// was still waiting (a first estimate needs both children started and a
+/// frame through the estimator).
+#[test]
+fn a_waiting_demo_stops_cleanly_with_an_empty_summary() {
+    let dir = recording("ramp16-clean");
+    for signal in [Signal::SIGINT, Signal::SIGTERM] {
+        let prefix = unique_prefix(&format!("demo-wait-{signal}"));
+        let mut demo = Proc::spawn(
+            "slope-demo",
+            [
+                "--recording",
+                dir.to_str().expect("utf-8 path"),
+                "--service-prefix",
+                &prefix,
+            ],
+        );
+        let header = demo.stdout_line(deadline(20.0));
+        assert!(
+            header
+                .as_deref()
+                .is_some_and(|l| l.starts_with("slope-demo:")),
+            "{header:?}\n{}",
+            demo.diagnostics()
+        );
+        demo.signal(signal);
+        demo.assert_exits_zero_within(Duration::from_secs(5));
+        let mut rest = Vec::new();
+        while let Some(line) = demo.stdout_line(deadline(1.0)) {
+            rest.push(line);
+        }
+        let summary = rest
+            .iter()
+            .find(|l| l.starts_with("summary:"))
+            .unwrap_or_else(|| panic!("no summary after the stop: {rest:?}"));
+        assert!(summary.contains(" 0 estimates"), "{summary}");
+    }
+}
