@@ -5,6 +5,7 @@
 use std::time::Duration;
 
 use nix::sys::signal::Signal;
+use serde_json::Value;
 use slope_integration_tests::{deadline, recording, unique_prefix, Proc};
 
 /// slope-record waiting for clouds that never come.
@@ -109,5 +110,86 @@ fn a_waiting_demo_stops_cleanly_with_an_empty_summary() {
             .find(|l| l.starts_with("summary:"))
             .unwrap_or_else(|| panic!("no summary after the stop: {rest:?}"));
         assert!(summary.contains(" 0 estimates"), "{summary}");
+    }
+}
+
+/// slope-eval stopped mid-run (after its first frames, logged at debug):
+/// status 0, the recording under way reported with the frames evaluated so
+/// far, and "interrupted after N of M frames" with 0 < N < M.
+#[test]
+fn an_evaluation_stops_cleanly_with_a_partial_report() {
+    let dir = recording("ramp16");
+    let dir = dir.to_str().expect("utf-8 path");
+    // Three times the 30-frame recording: 90 frames to evaluate.
+    let total = 90;
+    for (signal, json) in [(Signal::SIGINT, false), (Signal::SIGTERM, true)] {
+        let mut args = vec![dir, dir, dir, "-v"];
+        if json {
+            args.push("--json");
+        }
+        let mut eval = Proc::spawn("slope-eval", &args);
+        for _ in 0..2 {
+            let line = eval.wait_stderr("estimated", deadline(60.0));
+            assert!(line.is_some(), "{}", eval.diagnostics());
+        }
+        eval.signal(signal);
+        eval.assert_exits_zero_within(Duration::from_secs(10));
+        let mut stdout = Vec::new();
+        while let Some(line) = eval.stdout_line(deadline(1.0)) {
+            stdout.push(line);
+        }
+        let stderr = eval.stderr_lines().join("\n");
+        let note = if json {
+            stderr
+                .lines()
+                .find(|l| l.contains("interrupted after"))
+                .map(str::to_string)
+        } else {
+            stdout
+                .iter()
+                .find(|l| l.starts_with("interrupted after"))
+                .cloned()
+        };
+        let note = note.unwrap_or_else(|| panic!("no note: {stdout:#?}\n{stderr}"));
+        let numbers: Vec<usize> = note
+            .split("interrupted after ")
+            .nth(1)
+            .and_then(|rest| rest.split(" frames").next())
+            .map(|s| s.split(" of ").filter_map(|n| n.parse().ok()).collect())
+            .unwrap_or_default();
+        assert_eq!(numbers.len(), 2, "{note}");
+        let (done, asked) = (numbers[0], numbers[1]);
+        assert_eq!(asked, total, "{note}");
+        assert!(done >= 2 && done < total, "{note}");
+        let reported: usize = if json {
+            stdout
+                .iter()
+                .map(|l| {
+                    let report: Value =
+                        serde_json::from_str(l).unwrap_or_else(|e| panic!("not JSON: {l:?}: {e}"));
+                    let frames = report["summary"]["frames"].as_u64().expect("a count");
+                    assert_eq!(
+                        report["estimates"].as_array().map(Vec::len),
+                        Some(frames as usize),
+                        "{l}"
+                    );
+                    frames as usize
+                })
+                .sum()
+        } else {
+            // Rows: recording, method, frames, ok, ...
+            stdout
+                .iter()
+                .filter(|l| l.starts_with(dir))
+                .map(|l| {
+                    l[dir.len()..]
+                        .split_whitespace()
+                        .nth(1)
+                        .and_then(|n| n.parse::<usize>().ok())
+                        .unwrap_or_else(|| panic!("no frame count in {l:?}"))
+                })
+                .sum()
+        };
+        assert_eq!(reported, done, "{stdout:#?}");
     }
 }
