@@ -2,11 +2,13 @@
 //! were waiting for data or streaming it (a signal that interrupts an
 //! iceoryx2 wait is a stop request, not an error).
 
+use std::path::Path;
 use std::time::Duration;
 
 use nix::sys::signal::Signal;
 use serde_json::Value;
 use slope_integration_tests::{deadline, recording, unique_prefix, Proc};
+use slope_sensor::recording::{DepthImage, Recording};
 
 /// slope-record waiting for clouds that never come.
 #[test]
@@ -70,6 +72,34 @@ fn a_streaming_demo_stops_cleanly_with_its_summary() {
         rest.iter().any(|l| l.starts_with("summary:")),
         "no summary after the stop: {rest:?}"
     );
+}
+
+/// Rows of frames.csv under `dir` (0 while it does not exist yet).
+fn csv_rows(dir: &Path) -> usize {
+    std::fs::read_to_string(dir.join("frames.csv"))
+        .map(|text| text.lines().count().saturating_sub(1))
+        .unwrap_or(0)
+}
+
+/// The recording under `dir` opens, and every frames.csv row names a depth
+/// image that decodes; returns the frame count, which must also be the
+/// number of depth images on disk (nothing half-written is left behind).
+fn assert_valid_recording(dir: &Path) -> usize {
+    let recording =
+        Recording::open(dir).unwrap_or_else(|e| panic!("{} does not open: {e}", dir.display()));
+    let frames = recording.frames().len();
+    assert_eq!(frames, csv_rows(dir), "frames.csv rows");
+    let mut depth = DepthImage::default();
+    for frame in recording.frames() {
+        recording
+            .read_depth_into(frame, &mut depth)
+            .unwrap_or_else(|e| panic!("frame {} of {}: {e}", frame.index, dir.display()));
+    }
+    let images = std::fs::read_dir(dir.join("depth"))
+        .expect("depth/ exists")
+        .count();
+    assert_eq!(images, frames, "depth images vs frames.csv rows");
+    frames
 }
 
 /// slope-demo stopped while it waits for its first estimate: status 0 and
@@ -191,5 +221,44 @@ fn an_evaluation_stops_cleanly_with_a_partial_report() {
                 .sum()
         };
         assert_eq!(reported, done, "{stdout:#?}");
+    }
+}
+
+/// slope-synth stopped while it renders a long recording: status 0, a
+/// valid recording of the frames written so far (recording.toml, a
+/// frames.csv row per depth image), and the log says how many.
+#[test]
+fn a_synthesis_stops_cleanly_with_a_valid_recording() {
+    for signal in [Signal::SIGINT, Signal::SIGTERM] {
+        let out = tempfile::tempdir().expect("temp dir");
+        let out_dir = out.path().join("synth");
+        let mut synth = Proc::spawn_with_env(
+            "slope-synth",
+            [
+                "-o",
+                out_dir.to_str().expect("utf-8 path"),
+                "--frames",
+                "100000",
+                "--clean",
+                "--depth-only",
+                "--compression",
+                "fast",
+            ],
+            &[("RUST_LOG", "debug")],
+        );
+        for _ in 0..2 {
+            let line = synth.wait_stderr("frame written", deadline(60.0));
+            assert!(line.is_some(), "{}", synth.diagnostics());
+        }
+        synth.signal(signal);
+        synth.assert_exits_zero_within(Duration::from_secs(20));
+        let frames = assert_valid_recording(&out_dir);
+        assert!((2..100_000).contains(&frames), "{frames} frames");
+        // Its last words were read while waiting for the exit.
+        let noted = synth
+            .stderr_lines()
+            .iter()
+            .any(|l| l.contains("interrupted") && l.contains(&format!("frames={frames} ")));
+        assert!(noted, "{}", synth.diagnostics());
     }
 }
