@@ -1,9 +1,12 @@
 //! Programs stopped with SIGINT or SIGTERM end with status 0, whether they
 //! were waiting for data or streaming it (a signal that interrupts an
-//! iceoryx2 wait is a stop request, not an error).
+//! iceoryx2 wait is a stop request, not an error), and what they were
+//! writing stays valid: slope-record's and slope-synth's recordings open,
+//! slope-eval and slope-demo report what they did so far. (The replay,
+//! estimator and echo: backbone.rs and silent_waits.rs.)
 
 use std::path::Path;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use nix::sys::signal::Signal;
 use serde_json::Value;
@@ -100,6 +103,64 @@ fn assert_valid_recording(dir: &Path) -> usize {
         .count();
     assert_eq!(images, frames, "depth images vs frames.csv rows");
     frames
+}
+
+/// slope-record while clouds stream from a looping replay: SIGINT and
+/// SIGTERM end it with status 0 and a recording that opens, with as many
+/// frames as frames.csv lists.
+#[test]
+fn a_streaming_recorder_stops_cleanly_with_a_valid_recording() {
+    let source = recording("ramp16-clean");
+    for signal in [Signal::SIGINT, Signal::SIGTERM] {
+        let prefix = unique_prefix(&format!("record-stream-{signal}"));
+        let out = tempfile::tempdir().expect("temp dir");
+        let out_dir = out.path().join("scene");
+        let mut record = Proc::spawn(
+            "slope-record",
+            [
+                out_dir.to_str().expect("utf-8 path"),
+                "--service-prefix",
+                &prefix,
+            ],
+        )
+        .assert_ready("recording the cloud topic");
+        let mut replay = Proc::spawn(
+            "slope-replay",
+            [
+                source.to_str().expect("utf-8 path"),
+                "--service-prefix",
+                &prefix,
+                "--loop",
+                "--rate",
+                "10",
+            ],
+        );
+        let first = record.wait_stderr("first cloud; recording", deadline(30.0));
+        assert!(
+            first.is_some(),
+            "{}\n{}",
+            record.diagnostics(),
+            replay.diagnostics()
+        );
+        // Streaming: a few frames are on disk, more are coming.
+        let until = deadline(30.0);
+        while csv_rows(&out_dir) < 3 && Instant::now() < until {
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        assert!(csv_rows(&out_dir) >= 3, "{}", record.diagnostics());
+        record.signal(signal);
+        record.assert_exits_zero_within(Duration::from_secs(3));
+        let frames = assert_valid_recording(&out_dir);
+        assert!(frames >= 3, "{frames} frames");
+        // Its last words were read while waiting for the exit.
+        let finished = record
+            .stderr_lines()
+            .iter()
+            .any(|l| l.contains("recording finished") && l.contains("interrupted=true"));
+        assert!(finished, "{}", record.diagnostics());
+        replay.signal(Signal::SIGTERM);
+        replay.assert_exits_zero_within(Duration::from_secs(2));
+    }
 }
 
 /// slope-demo stopped while it waits for its first estimate: status 0 and
