@@ -7,11 +7,12 @@
 use std::collections::{BTreeSet, HashMap};
 use std::os::unix::fs::PermissionsExt;
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+use std::time::{Duration, Instant};
 
 use nix::sys::signal::Signal;
 use serde_json::Value;
 use slope_integration_tests::{deadline, recording, unique_prefix, Proc};
+use slope_ipc_types::now_ns;
 
 /// `slope-echo --json` on `prefix`, subscribed, printing every estimate.
 fn start_echo(prefix: &str) -> Proc {
@@ -37,14 +38,6 @@ fn start_replay(prefix: &str, rate: &str) -> Proc {
             rate,
         ],
     )
-}
-
-/// Nanoseconds since the Unix epoch, the clock of `publish_stamp_ns`.
-fn wall_ns() -> u64 {
-    let since = SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .expect("the clock is after 1970");
-    u64::try_from(since.as_nanos()).expect("fits in u64 until 2554")
 }
 
 /// The next estimate the echo prints, parsed, before `until`.
@@ -98,7 +91,7 @@ fn a_killed_estimator_is_restarted_and_estimates_resume_within_a_second() {
             status.is_some_and(|s| !s.success()),
             "round {round}: {status:?}"
         );
-        let killed_ns = wall_ns();
+        let killed_ns = now_ns();
         let started = Instant::now();
         estimator = Proc::spawn("slope-estimator", ["--service-prefix", &prefix]);
         let resumed = estimate_published_after(&mut echo, killed_ns, deadline(20.0));
@@ -150,7 +143,7 @@ fn a_killed_replay_is_restarted_and_the_estimator_resumes_by_itself() {
     );
     replay.signal(Signal::SIGKILL);
     assert!(replay.wait_exit(deadline(5.0)).is_some(), "replay survived");
-    let killed_ns = wall_ns();
+    let killed_ns = now_ns();
     let started = Instant::now();
     let mut replay = start_replay(&prefix, "20");
     let resumed = estimate_published_after(&mut echo, killed_ns, deadline(20.0));
@@ -220,7 +213,7 @@ fn a_subscriber_that_stops_reading_blocks_nobody() {
     assert!(recording.is_some(), "{}", stalled_record.diagnostics());
     stalled_echo.signal(Signal::SIGSTOP);
     stalled_record.signal(Signal::SIGSTOP);
-    let frozen_ns = wall_ns();
+    let frozen_ns = now_ns();
 
     // More estimates than the frozen echo's queue holds.
     let wanted = 80;
