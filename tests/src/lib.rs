@@ -123,7 +123,8 @@ impl Proc {
         S: AsRef<std::ffi::OsStr>,
     {
         let mut command = Command::new(binary(name));
-        command.args(args).envs(env.iter().copied());
+        command.args(args).env_remove("RUST_LOG");
+        command.envs(env.iter().copied());
         Self::start(name, command)
     }
 
@@ -135,12 +136,13 @@ impl Proc {
         S: AsRef<std::ffi::OsStr>,
     {
         let mut command = Command::new(path);
-        command.args(args);
+        command.args(args).env_remove("RUST_LOG");
         Self::start(&path.display().to_string(), command)
     }
 
+    /// Spawns `command` with piped output (`SLOPE_TEST_LOG` as its
+    /// `RUST_LOG` when set).
     fn start(name: &str, mut command: Command) -> Proc {
-        command.env_remove("RUST_LOG");
         if let Some(filter) = std::env::var_os("SLOPE_TEST_LOG") {
             command.env("RUST_LOG", filter);
         }

@@ -1,11 +1,17 @@
 //! Programs stopped with SIGINT or SIGTERM end with status 0, whether they
 //! were waiting for data or streaming it (a signal that interrupts an
-//! iceoryx2 wait is a stop request, not an error).
+//! iceoryx2 wait is a stop request, not an error), and what they were
+//! writing stays valid: slope-record's and slope-synth's recordings open,
+//! slope-eval and slope-demo report what they did so far. (The replay,
+//! estimator and echo: backbone.rs and silent_waits.rs.)
 
-use std::time::Duration;
+use std::path::Path;
+use std::time::{Duration, Instant};
 
 use nix::sys::signal::Signal;
+use serde_json::Value;
 use slope_integration_tests::{deadline, recording, unique_prefix, Proc};
+use slope_sensor::recording::{DepthImage, Recording};
 
 /// slope-record waiting for clouds that never come.
 #[test]
@@ -69,4 +75,251 @@ fn a_streaming_demo_stops_cleanly_with_its_summary() {
         rest.iter().any(|l| l.starts_with("summary:")),
         "no summary after the stop: {rest:?}"
     );
+}
+
+/// Rows of frames.csv under `dir` (0 while it does not exist yet).
+fn csv_rows(dir: &Path) -> usize {
+    std::fs::read_to_string(dir.join("frames.csv"))
+        .map(|text| text.lines().count().saturating_sub(1))
+        .unwrap_or(0)
+}
+
+/// The recording under `dir` opens, and every frames.csv row names a depth
+/// image that decodes; returns the frame count, which must also be the
+/// number of depth images on disk (nothing half-written is left behind).
+fn assert_valid_recording(dir: &Path) -> usize {
+    let recording =
+        Recording::open(dir).unwrap_or_else(|e| panic!("{} does not open: {e}", dir.display()));
+    let frames = recording.frames().len();
+    assert_eq!(frames, csv_rows(dir), "frames.csv rows");
+    let mut depth = DepthImage::default();
+    for frame in recording.frames() {
+        recording
+            .read_depth_into(frame, &mut depth)
+            .unwrap_or_else(|e| panic!("frame {} of {}: {e}", frame.index, dir.display()));
+    }
+    let images = std::fs::read_dir(dir.join("depth"))
+        .expect("depth/ exists")
+        .count();
+    assert_eq!(images, frames, "depth images vs frames.csv rows");
+    frames
+}
+
+/// slope-record while clouds stream from a looping replay: SIGINT and
+/// SIGTERM end it with status 0 and a recording that opens, with as many
+/// frames as frames.csv lists.
+#[test]
+fn a_streaming_recorder_stops_cleanly_with_a_valid_recording() {
+    let source = recording("ramp16-clean");
+    for signal in [Signal::SIGINT, Signal::SIGTERM] {
+        let prefix = unique_prefix(&format!("record-stream-{signal}"));
+        let out = tempfile::tempdir().expect("temp dir");
+        let out_dir = out.path().join("scene");
+        let mut record = Proc::spawn(
+            "slope-record",
+            [
+                out_dir.to_str().expect("utf-8 path"),
+                "--service-prefix",
+                &prefix,
+            ],
+        )
+        .assert_ready("recording the cloud topic");
+        let mut replay = Proc::spawn(
+            "slope-replay",
+            [
+                source.to_str().expect("utf-8 path"),
+                "--service-prefix",
+                &prefix,
+                "--loop",
+                "--rate",
+                "10",
+            ],
+        );
+        let first = record.wait_stderr("first cloud; recording", deadline(30.0));
+        assert!(
+            first.is_some(),
+            "{}\n{}",
+            record.diagnostics(),
+            replay.diagnostics()
+        );
+        // Streaming: a few frames are on disk, more are coming.
+        let until = deadline(30.0);
+        while csv_rows(&out_dir) < 3 && Instant::now() < until {
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        assert!(csv_rows(&out_dir) >= 3, "{}", record.diagnostics());
+        record.signal(signal);
+        record.assert_exits_zero_within(Duration::from_secs(3));
+        let frames = assert_valid_recording(&out_dir);
+        assert!(frames >= 3, "{frames} frames");
+        // Its last words were read while waiting for the exit.
+        let finished = record
+            .stderr_lines()
+            .iter()
+            .any(|l| l.contains("recording finished") && l.contains("interrupted=true"));
+        assert!(finished, "{}", record.diagnostics());
+        replay.signal(Signal::SIGTERM);
+        replay.assert_exits_zero_within(Duration::from_secs(2));
+    }
+}
+
+/// slope-demo stopped while it waits for its first estimate: status 0 and
+/// a summary of nothing. The signal comes as the demo announces the chain,
+/// before its children have started; the summary's "0 estimates" shows it
+/// was still waiting (a first estimate needs both children started and a
+/// frame through the estimator).
+#[test]
+fn a_waiting_demo_stops_cleanly_with_an_empty_summary() {
+    let dir = recording("ramp16-clean");
+    for signal in [Signal::SIGINT, Signal::SIGTERM] {
+        let prefix = unique_prefix(&format!("demo-wait-{signal}"));
+        let mut demo = Proc::spawn(
+            "slope-demo",
+            [
+                "--recording",
+                dir.to_str().expect("utf-8 path"),
+                "--service-prefix",
+                &prefix,
+            ],
+        );
+        let header = demo.stdout_line(deadline(20.0));
+        assert!(
+            header
+                .as_deref()
+                .is_some_and(|l| l.starts_with("slope-demo:")),
+            "{header:?}\n{}",
+            demo.diagnostics()
+        );
+        demo.signal(signal);
+        demo.assert_exits_zero_within(Duration::from_secs(5));
+        let mut rest = Vec::new();
+        while let Some(line) = demo.stdout_line(deadline(1.0)) {
+            rest.push(line);
+        }
+        let summary = rest
+            .iter()
+            .find(|l| l.starts_with("summary:"))
+            .unwrap_or_else(|| panic!("no summary after the stop: {rest:?}"));
+        assert!(summary.contains(" 0 estimates"), "{summary}");
+    }
+}
+
+/// slope-eval stopped mid-run (after its first frames, logged at debug):
+/// status 0, the recording under way reported with the frames evaluated so
+/// far, and "interrupted after N of M frames" with 0 < N < M.
+#[test]
+fn an_evaluation_stops_cleanly_with_a_partial_report() {
+    let dir = recording("ramp16");
+    let dir = dir.to_str().expect("utf-8 path");
+    // Three times the 30-frame recording: 90 frames to evaluate.
+    let total = 90;
+    for (signal, json) in [(Signal::SIGINT, false), (Signal::SIGTERM, true)] {
+        let mut args = vec![dir, dir, dir, "-v"];
+        if json {
+            args.push("--json");
+        }
+        let mut eval = Proc::spawn("slope-eval", &args);
+        for _ in 0..2 {
+            let line = eval.wait_stderr("estimated", deadline(60.0));
+            assert!(line.is_some(), "{}", eval.diagnostics());
+        }
+        eval.signal(signal);
+        eval.assert_exits_zero_within(Duration::from_secs(10));
+        let mut stdout = Vec::new();
+        while let Some(line) = eval.stdout_line(deadline(1.0)) {
+            stdout.push(line);
+        }
+        let stderr = eval.stderr_lines().join("\n");
+        let note = if json {
+            stderr
+                .lines()
+                .find(|l| l.contains("interrupted after"))
+                .map(str::to_string)
+        } else {
+            stdout
+                .iter()
+                .find(|l| l.starts_with("interrupted after"))
+                .cloned()
+        };
+        let note = note.unwrap_or_else(|| panic!("no note: {stdout:#?}\n{stderr}"));
+        let numbers: Vec<usize> = note
+            .split("interrupted after ")
+            .nth(1)
+            .and_then(|rest| rest.split(" frames").next())
+            .map(|s| s.split(" of ").filter_map(|n| n.parse().ok()).collect())
+            .unwrap_or_default();
+        assert_eq!(numbers.len(), 2, "{note}");
+        let (done, asked) = (numbers[0], numbers[1]);
+        assert_eq!(asked, total, "{note}");
+        assert!(done >= 2 && done < total, "{note}");
+        let reported: usize = if json {
+            stdout
+                .iter()
+                .map(|l| {
+                    let report: Value =
+                        serde_json::from_str(l).unwrap_or_else(|e| panic!("not JSON: {l:?}: {e}"));
+                    let frames = report["summary"]["frames"].as_u64().expect("a count");
+                    assert_eq!(
+                        report["estimates"].as_array().map(Vec::len),
+                        Some(frames as usize),
+                        "{l}"
+                    );
+                    frames as usize
+                })
+                .sum()
+        } else {
+            // Rows: recording, method, frames, ok, ...
+            stdout
+                .iter()
+                .filter(|l| l.starts_with(dir))
+                .map(|l| {
+                    l[dir.len()..]
+                        .split_whitespace()
+                        .nth(1)
+                        .and_then(|n| n.parse::<usize>().ok())
+                        .unwrap_or_else(|| panic!("no frame count in {l:?}"))
+                })
+                .sum()
+        };
+        assert_eq!(reported, done, "{stdout:#?}");
+    }
+}
+
+/// slope-synth stopped while it renders a long recording: status 0, a
+/// valid recording of the frames written so far (recording.toml, a
+/// frames.csv row per depth image), and the log says how many.
+#[test]
+fn a_synthesis_stops_cleanly_with_a_valid_recording() {
+    for signal in [Signal::SIGINT, Signal::SIGTERM] {
+        let out = tempfile::tempdir().expect("temp dir");
+        let out_dir = out.path().join("synth");
+        let mut synth = Proc::spawn_with_env(
+            "slope-synth",
+            [
+                "-o",
+                out_dir.to_str().expect("utf-8 path"),
+                "--frames",
+                "100000",
+                "--clean",
+                "--depth-only",
+                "--compression",
+                "fast",
+            ],
+            &[("RUST_LOG", "debug")],
+        );
+        for _ in 0..2 {
+            let line = synth.wait_stderr("frame written", deadline(60.0));
+            assert!(line.is_some(), "{}", synth.diagnostics());
+        }
+        synth.signal(signal);
+        synth.assert_exits_zero_within(Duration::from_secs(20));
+        let frames = assert_valid_recording(&out_dir);
+        assert!((2..100_000).contains(&frames), "{frames} frames");
+        // Its last words were read while waiting for the exit.
+        let noted = synth
+            .stderr_lines()
+            .iter()
+            .any(|l| l.contains("interrupted") && l.contains(&format!("frames={frames} ")));
+        assert!(noted, "{}", synth.diagnostics());
+    }
 }

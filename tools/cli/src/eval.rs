@@ -14,6 +14,12 @@
 //! reported by name, the others are still evaluated, and the program exits
 //! non-zero at the end ([`EvalOutcome::check`]).
 //!
+//! SIGINT/SIGTERM stop the run after the frame being evaluated: the
+//! recording under way is reported with the frames evaluated so far, the
+//! recordings not reached are not, and the run says how far it got
+//! ([`Interruption`]). What the stop left undone is no failure; problems
+//! found before it still are.
+//!
 //! Accuracy: the ground truth of a recording is unsigned (0..90 degrees, the
 //! angle between the two planes), the estimates are signed (+ uphill), so the
 //! error compares magnitudes: `abs_error_deg = |median(|slope_deg|) - truth_deg|`
@@ -34,6 +40,8 @@ use slope_pipeline::{
     CloudView, Estimate, Estimator, EstimatorConfig, FrameInfo, PlaneEstimate, StageTimings,
 };
 use slope_sensor::recording::{DepthImage, FrameEntry, Recording};
+
+use slope_sensor::publish::StopFlag;
 
 use crate::cli::CommonArgs;
 use crate::demo::median;
@@ -65,7 +73,14 @@ inliers, RMS and area, the confidence and its reasons, ground_from_mount and the
 the summary counts the ok frames whose confidence is below 0.5 (low_confidence_frames).\n\n\
 A frame whose depth image cannot be read is reported with status bad_frame and its error; the \
 evaluation goes on. A recording that cannot be opened is reported by name, the others are still \
-evaluated, and the exit status is non-zero.",
+evaluated, and the exit status is non-zero.\n\n\
+SIGINT or SIGTERM (Ctrl-C) stops the run after the frame being evaluated: the recording under way \
+is reported with the frames evaluated so far (its summary covers those frames only), recordings \
+not reached are not reported, and the run says \"interrupted after N of M frames\" (below the \
+table on stdout; on stderr with --json, whose stdout stays JSON lines). The exit status is then 0: \
+frames, recordings and a --render frame that the stop left undone are not failures. Problems found \
+before the stop (a recording that did not open, a frame that could not be rendered) still make it \
+non-zero. A second signal ends the program at once (status 130).",
     after_help = "Examples:
   slope-eval tests/recordings/ramp16                       # table: paper method
   slope-eval tests/recordings/* --method all               # the three methods side by side
@@ -479,16 +494,39 @@ pub fn frame_result(index: u64, truth_deg: Option<f64>, estimate: &Estimate) -> 
     }
 }
 
+/// How far a run got before SIGINT/SIGTERM stopped it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Interruption {
+    /// Frames evaluated (by every method), over all recordings.
+    pub frames_done: usize,
+    /// Frames the run was asked to evaluate, over all recordings that opened.
+    pub frames_total: usize,
+}
+
+impl std::fmt::Display for Interruption {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "interrupted after {} of {} frames",
+            self.frames_done, self.frames_total
+        )
+    }
+}
+
 /// What a run produced, and which recordings failed.
 #[derive(Debug, Default)]
 pub struct EvalOutcome {
     pub reports: Vec<MethodReport>,
     /// One message per recording that could not be evaluated (or rendered).
     pub failures: Vec<String>,
+    /// Set when a signal stopped the run before every frame was evaluated.
+    pub interrupted: Option<Interruption>,
 }
 
 impl EvalOutcome {
-    /// An error naming the failed recordings, if any.
+    /// An error naming the failed recordings, if any. An interrupted run is
+    /// judged on what it did: frames and recordings the stop left undone are
+    /// not failures.
     pub fn check(&self) -> anyhow::Result<()> {
         if self.failures.is_empty() {
             return Ok(());
@@ -503,8 +541,10 @@ impl EvalOutcome {
 
 /// Evaluates every recording of `args`, printing each report as it is done
 /// (table or JSON lines on stdout). Failures are logged and collected, not
-/// returned: call [`EvalOutcome::check`] for the exit status.
-pub fn run(args: &EvalArgs) -> anyhow::Result<EvalOutcome> {
+/// returned: call [`EvalOutcome::check`] for the exit status. When `stop`
+/// is set, the run ends after the frame under way, reports the frames
+/// evaluated so far and says how far it got.
+pub fn run(args: &EvalArgs, stop: &StopFlag) -> anyhow::Result<EvalOutcome> {
     let configs = configs(args)?;
     let artifacts = Artifacts {
         render_dir: args.render.clone(),
@@ -559,8 +599,12 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<EvalOutcome> {
         return Ok(outcome);
     }
     let mut render_names = RenderNames::default();
+    let mut frames_done = 0;
 
     for (path, recording) in &opened {
+        if stop.is_stopped() {
+            break;
+        }
         let label = path.display().to_string();
         bar.set_prefix(short_name(path));
         let frames = &recording.frames()[..frame_limit(recording)];
@@ -579,14 +623,35 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<EvalOutcome> {
             artifacts: &artifacts,
             name: &name,
         };
-        let (reports, failures) =
-            evaluate_recording(recording, &label, frames, &mut estimators, &target, &bar);
+        let (reports, failures, evaluated) = evaluate_recording(
+            recording,
+            &label,
+            frames,
+            &mut estimators,
+            &target,
+            &bar,
+            stop,
+        );
         outcome.failures.extend(failures);
+        frames_done += evaluated;
+        if evaluated == 0 && stop.is_stopped() {
+            // Stopped before this recording's first frame: nothing to report.
+            break;
+        }
         if let Some(frame) = args.render_frame {
-            if artifacts.enabled() && !frames.iter().any(|f| f.index == frame) {
+            let asked = frames.iter().any(|f| f.index == frame);
+            let reached = frames[..evaluated].iter().any(|f| f.index == frame);
+            if artifacts.enabled() && !asked {
                 outcome.failures.push(format!(
                     "cannot render frame {frame} of {label}: no such frame was evaluated"
                 ));
+            } else if artifacts.enabled() && !reached {
+                // Only a stop leaves an evaluated frame unreached: not a failure.
+                tracing::warn!(
+                    recording = label.as_str(),
+                    frame,
+                    "not rendered: the run was interrupted before this frame"
+                );
             }
         }
         for report in &reports {
@@ -601,6 +666,7 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<EvalOutcome> {
                 return Ok(outcome);
             }
         }
+        let cut_short = evaluated < frames.len();
         if let Some(dir) = &args.plot {
             let path = dir.join(format!("{name}-plot.png"));
             match bar.suspend(|| write_recording_plot(&path, &label, &reports)) {
@@ -609,8 +675,22 @@ pub fn run(args: &EvalArgs) -> anyhow::Result<EvalOutcome> {
             }
         }
         outcome.reports.extend(reports);
+        if cut_short {
+            break;
+        }
     }
     bar.finish_and_clear();
+    if stop.is_stopped() && frames_done < total {
+        let interruption = Interruption {
+            frames_done,
+            frames_total: total,
+        };
+        tracing::warn!("{interruption}; the reports cover the frames evaluated");
+        if !args.json {
+            print_line(&bar, &format!("{interruption}"))?;
+        }
+        outcome.interrupted = Some(interruption);
+    }
     Ok(outcome)
 }
 
@@ -628,7 +708,9 @@ fn print_line(bar: &ProgressBar, text: &str) -> anyhow::Result<bool> {
     }
 }
 
-/// Runs every estimator on every frame of one recording, in order.
+/// Runs every estimator on every frame of one recording, in order, until
+/// `stop` is set, writing the pictures and clouds asked for; returns the
+/// reports, what could not be written and how many frames were evaluated.
 fn evaluate_recording(
     recording: &Recording,
     label: &str,
@@ -636,7 +718,8 @@ fn evaluate_recording(
     estimators: &mut [Estimator],
     target: &ArtifactTarget<'_>,
     bar: &ProgressBar,
-) -> (Vec<MethodReport>, Vec<String>) {
+    stop: &StopFlag,
+) -> (Vec<MethodReport>, Vec<String>, usize) {
     let projector = recording.projector();
     let mut depth = DepthImage::default();
     let mut points = vec![CloudPoint::INVALID; projector.len()];
@@ -645,7 +728,12 @@ fn evaluate_recording(
     let mut failures = Vec::new();
     let meta = recording.meta();
     let (width, height) = (meta.depth.width as usize, meta.depth.height as usize);
+    let mut evaluated = 0;
     for (position, frame) in frames.iter().enumerate() {
+        if stop.is_stopped() {
+            break;
+        }
+        evaluated += 1;
         let wanted = target.artifacts.wants(position, frame.index, frames.len());
         let truth_deg = recording.truth_deg(frame);
         match recording.read_depth_into(frame, &mut depth) {
@@ -729,7 +817,7 @@ fn evaluate_recording(
             MethodReport::new(label.to_string(), estimator.config().method, estimates)
         })
         .collect();
-    (reports, failures)
+    (reports, failures, evaluated)
 }
 
 /// Where one recording's pictures and clouds go.

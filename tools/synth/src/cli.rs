@@ -2,11 +2,13 @@
 //! scene file for the rest, and [`run`], which the binary calls after
 //! parsing and setting up logging.
 
+use std::ops::ControlFlow;
 use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::{Parser, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
+use slope_sensor::publish::StopFlag;
 use slope_sensor::recording::PngCompression;
 
 use crate::recording::{write_recording_with, RecordingSummary, WriteOptions};
@@ -30,6 +32,10 @@ Examples:
   # Everything else (boxes, side walls, tables, a ceiling, soft blocks, sensor
   # parameters) from a scene file; flags given on the command line override it
   slope-synth --scene scene.toml --seed 3 -o /tmp/scene
+
+SIGINT or SIGTERM (Ctrl-C) stops after the frame being rendered: the recording then holds the
+frames written so far (recording.toml, a frames.csv row for every depth image), the log says how
+many, and the exit status is 0. A second signal ends the program at once (status 130).
 
 Conventions: world x right, y forward, z up; camera x right, y down, z forward.
 Depth PNGs hold z along the optical axis in millimetres (0 = no reading).
@@ -219,8 +225,26 @@ impl Args {
     }
 }
 
-/// Renders and writes the recording the arguments describe.
-pub fn run(args: &Args) -> anyhow::Result<RecordingSummary> {
+/// Installs the SIGINT/SIGTERM handler and returns the flag it sets; a
+/// second signal while stopping ends the process at once (status 130).
+pub fn stop_on_signals() -> anyhow::Result<StopFlag> {
+    let stop = StopFlag::new();
+    let handler_flag = stop.clone();
+    ctrlc::set_handler(move || {
+        if handler_flag.is_stopped() {
+            std::process::exit(130);
+        }
+        handler_flag.stop();
+    })
+    .context("failed to install the SIGINT/SIGTERM handler")?;
+    Ok(stop)
+}
+
+/// Renders and writes the recording the arguments describe. When `stop` is
+/// set, it stops after the frame being rendered and leaves a valid
+/// recording of the frames written so far
+/// ([`RecordingSummary::is_partial`]).
+pub fn run(args: &Args, stop: &StopFlag) -> anyhow::Result<RecordingSummary> {
     let (scene, model) = args.scene_and_model()?;
     let options = WriteOptions {
         color: !args.depth_only,
@@ -240,7 +264,14 @@ pub fn run(args: &Args) -> anyhow::Result<RecordingSummary> {
         args.seed,
         &args.output,
         options,
-        |_| progress.inc(1),
+        |_| {
+            progress.inc(1);
+            if stop.is_stopped() {
+                ControlFlow::Break(())
+            } else {
+                ControlFlow::Continue(())
+            }
+        },
     )
     .with_context(|| format!("failed to write recording {}", args.output.display()));
     progress.finish_and_clear();

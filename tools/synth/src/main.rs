@@ -1,5 +1,6 @@
 //! `slope-synth`: parse the command line, set up logging, call [`slope_synth::run`].
 
+use std::io::IsTerminal;
 use std::process::ExitCode;
 
 use clap::Parser;
@@ -12,8 +13,18 @@ fn main() -> ExitCode {
             EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new("info")),
         )
         .with_writer(std::io::stderr)
+        .with_ansi(std::io::stderr().is_terminal())
         .init();
-    match slope_synth::run(&args) {
+    match slope_synth::cli::stop_on_signals().and_then(|stop| slope_synth::run(&args, &stop)) {
+        Ok(summary) if summary.is_partial() => {
+            tracing::info!(
+                dir = %summary.dir.display(),
+                frames = summary.frames,
+                asked = summary.frames_asked,
+                "interrupted: a valid recording of the frames written so far"
+            );
+            ExitCode::SUCCESS
+        }
         Ok(summary) => {
             tracing::info!(dir = %summary.dir.display(), frames = summary.frames, "done");
             ExitCode::SUCCESS

@@ -7,6 +7,7 @@
 //! keyed by `(seed, k)`, so the same seed gives the same bytes, and any
 //! frame can be rendered on its own.
 
+use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -53,9 +54,19 @@ impl Default for WriteOptions {
 #[derive(Debug, Clone, PartialEq)]
 pub struct RecordingSummary {
     pub dir: PathBuf,
+    /// Frames written (fewer than asked for when stopped early).
     pub frames: u64,
-    /// Fraction of pixels with a depth reading, over all frames.
+    /// Frames asked for.
+    pub frames_asked: u64,
+    /// Fraction of pixels with a depth reading, over the frames written.
     pub valid_fraction: f64,
+}
+
+impl RecordingSummary {
+    /// True when the writing stopped before every frame asked for was written.
+    pub fn is_partial(&self) -> bool {
+        self.frames < self.frames_asked
+    }
 }
 
 /// The random stream of frame `index` of a recording made with `seed`.
@@ -145,12 +156,15 @@ pub fn write_recording(
         seed,
         out_dir,
         WriteOptions::default(),
-        |_| {},
+        |_| ControlFlow::Continue(()),
     )
 }
 
 /// [`write_recording`] with options, calling `on_frame(index)` after each
-/// frame is on disk (for progress bars).
+/// frame is on disk (for progress bars). When `on_frame` returns
+/// `ControlFlow::Break`, no further frame is rendered: the recording holds
+/// the frames written so far (recording.toml, and a frames.csv row for
+/// every depth image) and is as valid as a complete one.
 pub fn write_recording_with(
     scene: &Scene,
     model: &SensorModel,
@@ -158,7 +172,7 @@ pub fn write_recording_with(
     seed: u64,
     out_dir: &Path,
     options: WriteOptions,
-    mut on_frame: impl FnMut(u64),
+    mut on_frame: impl FnMut(u64) -> ControlFlow<()>,
 ) -> Result<RecordingSummary, WriteError> {
     scene.validate()?;
     model.validate()?;
@@ -203,6 +217,7 @@ pub fn write_recording_with(
 
     let started = Instant::now();
     let mut valid = 0u64;
+    let mut written = 0u64;
     for index in 0..frames {
         let mut rng = frame_rng(seed, index);
         let camera = frame_camera(scene, model, index, &mut rng);
@@ -221,22 +236,28 @@ pub fn write_recording_with(
             .write_frame(frame_timestamp_ns(index), &depth, color.as_ref(), None)
             .map_err(recording_error)?;
         tracing::debug!(frame = index, valid_pixels = frame_valid, "frame written");
-        on_frame(index);
+        written += 1;
+        if on_frame(index).is_break() {
+            break;
+        }
     }
     let dir = writer.finish().map_err(recording_error)?;
 
-    let pixels = frames as f64 * f64::from(scene.camera.width) * f64::from(scene.camera.height);
+    // `written` is at least 1: the loop runs for frame 0 and counts it
+    // before it can stop.
+    let pixels = written as f64 * f64::from(scene.camera.width) * f64::from(scene.camera.height);
     let valid_fraction = valid as f64 / pixels;
     let elapsed = started.elapsed().as_secs_f64();
     tracing::info!(
-        frames,
+        frames = written,
         valid_fraction = format!("{valid_fraction:.3}"),
-        seconds_per_frame = format!("{:.3}", elapsed / frames as f64),
+        seconds_per_frame = format!("{:.3}", elapsed / written as f64),
         "recording written"
     );
     Ok(RecordingSummary {
         dir,
-        frames,
+        frames: written,
+        frames_asked: frames,
         valid_fraction,
     })
 }

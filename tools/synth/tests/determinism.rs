@@ -2,9 +2,11 @@
 //! depend on the seed at all.
 
 use std::fs;
+use std::ops::ControlFlow;
 use std::path::Path;
 
-use slope_synth::{write_recording, Scene, SensorModel};
+use slope_sensor::recording::Recording;
+use slope_synth::{write_recording, write_recording_with, Scene, SensorModel, WriteOptions};
 
 /// Every file of a recording, relative path and bytes, sorted by path.
 fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
@@ -73,4 +75,43 @@ fn clean_output_ignores_the_seed() {
     let (_a, first) = render(&SensorModel::clean(), 1);
     let (_b, other) = render(&SensorModel::clean(), 2);
     assert_eq!(first, other);
+}
+
+/// Stopped after frame 1 of 5 (what SIGINT does to `slope-synth`), the
+/// recording is byte for byte the recording of exactly 2 frames: valid,
+/// complete, with nothing of the frames not rendered.
+#[test]
+fn a_recording_stopped_early_is_the_recording_of_the_frames_written() {
+    let model = SensorModel::default();
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("stopped");
+    let mut seen = Vec::new();
+    let summary = write_recording_with(
+        &Scene::default_ramp(),
+        &model,
+        5,
+        7,
+        &out,
+        WriteOptions::default(),
+        |index| {
+            seen.push(index);
+            if index == 1 {
+                ControlFlow::Break(())
+            } else {
+                ControlFlow::Continue(())
+            }
+        },
+    )
+    .expect("written");
+    assert_eq!(seen, [0, 1]);
+    assert_eq!((summary.frames, summary.frames_asked), (2, 5));
+    assert!(summary.is_partial());
+    assert!(summary.valid_fraction > 0.5, "{summary:?}");
+    let recording = Recording::open(&out).expect("the stopped recording opens");
+    assert_eq!(recording.frames().len(), 2);
+
+    let full = dir.path().join("two");
+    let complete = write_recording(&Scene::default_ramp(), &model, 2, 7, &full).expect("written");
+    assert!(!complete.is_partial());
+    assert_eq!(files(&out), files(&full));
 }

@@ -26,8 +26,10 @@ pub fn write_and_open(
         color: false,
         compression: PngCompression::Fast,
     };
-    write_recording_with(scene, model, frames, seed, dir, options, |_| {})
-        .expect("recording written");
+    write_recording_with(scene, model, frames, seed, dir, options, |_| {
+        std::ops::ControlFlow::Continue(())
+    })
+    .expect("recording written");
     Recording::open(dir).expect("recording readable")
 }
 
