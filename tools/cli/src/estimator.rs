@@ -6,7 +6,7 @@
 //! never falls behind the camera. The cloud is read in place from the
 //! publisher's shared memory: the pipeline borrows the sample's slice.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::Context;
@@ -30,7 +30,7 @@ estimator on the newest frame and publishes one SlopeEstimate per processed fram
 arrive while a frame is being processed are superseded by the newest one and counted as dropped. \
 Stops cleanly on SIGINT or SIGTERM.",
     after_help = "Examples:
-  slope-estimator                              # the paper's method, default parameters
+  slope-estimator                              # parameters from /etc/slope/slope.toml if it exists, else the defaults
   slope-estimator --method tls                 # total-least-squares baseline
   slope-estimator --config estimator.toml      # parameters from a TOML file
   slope-estimator --config estimator.toml --print-config   # every parameter in effect, then exit
@@ -47,7 +47,8 @@ pub struct EstimatorArgs {
     pub method: Option<SlopeMethod>,
 
     /// TOML file with estimator parameters (see the pipeline README);
-    /// missing keys keep the paper's defaults.
+    /// missing keys keep the paper's defaults. Without it the estimator
+    /// reads /etc/slope/slope.toml if that exists.
     #[arg(long)]
     pub config: Option<PathBuf>,
 
@@ -89,6 +90,24 @@ pub fn method_arg(text: &str) -> Result<SlopeMethod, String> {
         .ok_or_else(|| format!("unknown method '{text}': expected paper, least-squares or tls"))
 }
 
+/// The file the estimator reads when not given `--config`, if it exists
+/// (the Debian package installs it, every key commented out).
+pub const DEFAULT_CONFIG_PATH: &str = "/etc/slope/slope.toml";
+
+/// The config file to read: `given` (`--config`), else `default` if it
+/// exists. A `default` that cannot even be looked at (a directory without
+/// permission) is returned too, so that reading it fails with a message
+/// rather than the defaults being used silently.
+pub fn config_path(given: Option<&Path>, default: &Path) -> Option<PathBuf> {
+    match given {
+        Some(path) => Some(path.to_path_buf()),
+        None => match default.try_exists() {
+            Ok(false) => None,
+            Ok(true) | Err(_) => Some(default.to_path_buf()),
+        },
+    }
+}
+
 /// Reads the configuration file (if any) and applies command-line overrides.
 pub fn load_config(
     path: Option<&PathBuf>,
@@ -123,7 +142,12 @@ pub fn config_toml(config: &EstimatorConfig) -> anyhow::Result<String> {
 }
 
 pub fn run(args: &EstimatorArgs, stop: &StopFlag) -> anyhow::Result<EstimatorStats> {
-    let config = load_config(args.config.as_ref(), args.method)?;
+    let path = config_path(args.config.as_deref(), Path::new(DEFAULT_CONFIG_PATH));
+    let config = load_config(path.as_ref(), args.method)?;
+    match &path {
+        Some(path) => tracing::info!(config = %path.display(), "estimator parameters loaded"),
+        None => tracing::info!("no {DEFAULT_CONFIG_PATH} and no --config: default parameters"),
+    }
     if args.print_config {
         print!("{}", config_toml(&config)?);
         return Ok(EstimatorStats::default());
@@ -283,5 +307,30 @@ impl Worker<'_> {
             "published estimate"
         );
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn without_config_the_default_file_is_read_when_it_exists() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let default = dir.path().join("slope.toml");
+        assert_eq!(config_path(None, &default), None);
+        assert_eq!(
+            load_config(config_path(None, &default).as_ref(), None).expect("defaults"),
+            EstimatorConfig::default()
+        );
+        std::fs::write(&default, "seed = 7\n[ransac]\nmax_planes = 12\n").expect("write");
+        assert_eq!(config_path(None, &default), Some(default.clone()));
+        let config = load_config(config_path(None, &default).as_ref(), None).expect("config");
+        assert_eq!((config.seed, config.ransac.max_planes), (7, 12));
+        // --config wins, and is read even when it does not exist (an error).
+        let given = dir.path().join("other.toml");
+        assert_eq!(config_path(Some(&given), &default), Some(given.clone()));
+        let err = load_config(Some(&given), None).expect_err("no such file");
+        assert!(format!("{err:#}").contains("other.toml"), "{err:#}");
     }
 }
