@@ -124,6 +124,7 @@ fn draw_slopes<DB: DrawingBackend>(
     chart
         .configure_mesh()
         .x_desc("frame")
+        .x_label_formatter(&|x| format!("{x:.0}"))
         .y_desc("slope (degrees)")
         .label_style((FAMILY, 15))
         .draw()
@@ -204,6 +205,7 @@ fn draw_times<DB: DrawingBackend>(
     chart
         .configure_mesh()
         .x_desc("frame")
+        .x_label_formatter(&|x| format!("{x:.0}"))
         .y_desc("time per frame (ms)")
         .label_style((FAMILY, 15))
         .draw()
