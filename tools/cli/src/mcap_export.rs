@@ -215,14 +215,20 @@ impl McapExporter {
         self.put(self.cloud, frame.stamp_ns, &cloud)?;
 
         if let Some(estimate) = frame.estimate {
-            let mut value = serde_json::to_value(EstimateJson::from(estimate))
-                .context("cannot write an estimate as JSON")?;
-            if let Some(object) = value.as_object_mut() {
-                object.insert("schema".to_string(), json!(ESTIMATE_SCHEMA));
-            }
-            self.put(self.estimate, frame.stamp_ns, &value)?;
+            self.write_estimate(estimate)?;
         }
         Ok(())
+    }
+
+    /// Writes an estimate, stamped with its frame's capture time (so that
+    /// it lines up with the frame's depth and cloud).
+    pub fn write_estimate(&mut self, estimate: &SlopeEstimate) -> anyhow::Result<()> {
+        let mut value = serde_json::to_value(EstimateJson::from(estimate))
+            .context("cannot write an estimate as JSON")?;
+        if let Some(object) = value.as_object_mut() {
+            object.insert("schema".to_string(), json!(ESTIMATE_SCHEMA));
+        }
+        self.put(self.estimate, estimate.capture_stamp_ns, &value)
     }
 
     fn put(

@@ -16,7 +16,7 @@ use std::time::{Duration, Instant};
 use anyhow::Context;
 use clap::{Parser, ValueEnum};
 use slope_ipc_types::{CloudHeader, CloudPoint, CloudSource, Mount};
-use slope_sensor::ipc::{create_node, CloudSubscriber};
+use slope_sensor::ipc::{create_node, CloudSubscriber, EstimateSubscriber};
 use slope_sensor::publish::StopFlag;
 use slope_sensor::recording::{
     ColorImage, DepthImage, DepthInfo, MountInfo, PngCompression, RecordingMeta, RecordingWriter,
@@ -25,6 +25,7 @@ use slope_sensor::recording::{
 use slope_sensor::source::{FrameSource, SourceFrame, SourceInfo};
 
 use crate::cli::{node_name, CommonArgs};
+use crate::mcap_export::{McapExporter, McapFrame};
 use crate::mount_args::MountArgs;
 use crate::replay::positive_f64;
 
@@ -45,6 +46,16 @@ pub enum RecordSource {
     Topic,
     /// The Kinect v2 directly (needs a build with `--features kinect2`).
     Kinect,
+}
+
+/// What the recorder writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum RecordFormat {
+    /// A recording directory (the recording format) that slope-replay plays.
+    Recording,
+    /// An MCAP file (Foxglove, ROS 2 tooling): depth, cloud and, when an
+    /// estimator runs, its estimates (topic source only).
+    Mcap,
 }
 
 /// PNG compression of the written images.
@@ -79,11 +90,20 @@ is flushed as soon as its images are written, so a recording cut short stays rea
   slope-record scene1 --max-frames 300                 # ten seconds of a 30 Hz camera
   slope-record scene1 --source kinect --mount-pitch-deg -20 --mount-height-m 0.5
   slope-replay scene1                                  # ... and play it back later
-  slope-record copy --idle-timeout-s 2 & slope-replay REC --wait-subscribers 1"
+  slope-record copy --idle-timeout-s 2 & slope-replay REC --wait-subscribers 1
+  slope-record run.mcap --format mcap --max-frames 300  # for Foxglove, with the estimates"
 )]
 pub struct RecordArgs {
-    /// The recording directory to create (must not exist, or be empty).
+    /// The recording directory to create (must not exist, or be empty); with
+    /// --format mcap, the MCAP file to create (must not exist).
     pub out_dir: PathBuf,
+
+    /// Write a recording directory, or an MCAP file: per cloud the depth
+    /// image (/slope/depth, foxglove.RawImage) and the cloud
+    /// (/slope/cloud, foxglove.PointCloud), and every estimate published
+    /// meanwhile (/slope/estimate, JSON), stamped with the capture time.
+    #[arg(long, value_enum, default_value_t = RecordFormat::Recording)]
+    pub format: RecordFormat,
 
     /// Where frames come from.
     #[arg(long, value_enum, default_value_t = RecordSource::Topic)]
@@ -162,6 +182,8 @@ pub struct RecordStats {
     pub skipped: u64,
     /// True when a signal ended the recording.
     pub stopped: bool,
+    /// Estimates written (MCAP only).
+    pub estimates: u64,
 }
 
 fn mount_info(mount: &Mount) -> MountInfo {
@@ -345,6 +367,38 @@ pub fn record_source(
     Ok(stats)
 }
 
+/// Where the topic's frames go.
+enum Sink {
+    Recording(Box<RecordingWriter>),
+    Mcap(Box<McapExporter>),
+}
+
+impl Sink {
+    /// Creates the sink of `args` for clouds described by `info`.
+    fn create(args: &RecordArgs, info: &SourceInfo, sensor: &str) -> anyhow::Result<Self> {
+        let out = &args.out_dir;
+        Ok(match args.format {
+            RecordFormat::Recording => {
+                let mut recording = RecordingWriter::create(out, &meta_for(info, sensor), false)
+                    .with_context(|| format!("cannot create the recording {}", out.display()))?;
+                recording.set_compression(args.compression.into());
+                Sink::Recording(Box::new(recording))
+            }
+            RecordFormat::Mcap => Sink::Mcap(Box::new(McapExporter::create(out)?)),
+        })
+    }
+
+    fn finish(self, out: &Path) -> anyhow::Result<()> {
+        match self {
+            Sink::Recording(recording) => recording
+                .finish()
+                .map(drop)
+                .with_context(|| format!("cannot finish the recording {}", out.display())),
+            Sink::Mcap(mcap) => mcap.finish(),
+        }
+    }
+}
+
 /// Records the cloud topic until a limit is reached or `stop` is set.
 pub fn record_topic(
     args: &RecordArgs,
@@ -355,10 +409,16 @@ pub fn record_topic(
     let node = create_node(&node_name("slope-record"))?;
     let subscriber =
         CloudSubscriber::create(&node, &names).context("cannot subscribe to clouds")?;
+    let estimates = match args.format {
+        RecordFormat::Mcap => Some(
+            EstimateSubscriber::create(&node, &names).context("cannot subscribe to estimates")?,
+        ),
+        RecordFormat::Recording => None,
+    };
     tracing::info!(service = subscriber.service_name(), out = %args.out_dir.display(), "recording the cloud topic");
 
     let mut stats = RecordStats::default();
-    let mut writer: Option<(RecordingWriter, CloudHeader)> = None;
+    let mut writer: Option<(Sink, CloudHeader)> = None;
     let mut depth = DepthImage::default();
     let mut color: Option<ColorImage> = None;
     let mut timeline = Timeline::new();
@@ -396,6 +456,14 @@ pub fn record_topic(
             }
         }
         subscriber.listener().wait(slice)?;
+        // Estimates (MCAP only) once the file exists; earlier ones belong
+        // to clouds that were not recorded.
+        if let (Some(estimates), Some((Sink::Mcap(mcap), _))) = (&estimates, &mut writer) {
+            while let Some(estimate) = estimates.receive()? {
+                mcap.write_estimate(&estimate)?;
+                stats.estimates += 1;
+            }
+        }
         while let Some(sample) = subscriber.receive()? {
             let header = *sample.header();
             let points = sample.points();
@@ -436,12 +504,7 @@ pub fn record_topic(
                         Some(CloudSource::Camera) => "kinect2",
                         _ => "replay",
                     };
-                    let mut recording =
-                        RecordingWriter::create(&args.out_dir, &meta_for(&info, sensor), false)
-                            .with_context(|| {
-                                format!("cannot create the recording {}", args.out_dir.display())
-                            })?;
-                    recording.set_compression(args.compression.into());
+                    let recording = Sink::create(args, &info, sensor)?;
                     first_at = Some(Instant::now());
                     tracing::info!(
                         width = header.width,
@@ -465,16 +528,29 @@ pub fn record_topic(
                 continue;
             }
             cloud_to_images(&header, points, TOPIC_DEPTH_UNIT_M, &mut depth, &mut color);
-            let timestamp_ns = timeline.stamp(header.source_stamp_ns);
-            recording
-                .write_frame(timestamp_ns, &depth, color.as_ref(), None)
-                .with_context(|| {
-                    format!(
-                        "cannot write frame {} into {}",
-                        stats.written,
-                        args.out_dir.display()
-                    )
-                })?;
+            match recording {
+                Sink::Recording(recording) => {
+                    let timestamp_ns = timeline.stamp(header.source_stamp_ns);
+                    recording
+                        .write_frame(timestamp_ns, &depth, color.as_ref(), None)
+                        .with_context(|| {
+                            format!(
+                                "cannot write frame {} into {}",
+                                stats.written,
+                                args.out_dir.display()
+                            )
+                        })?;
+                }
+                Sink::Mcap(mcap) => mcap.write(&McapFrame {
+                    stamp_ns: header.capture_stamp_ns,
+                    width: header.width,
+                    height: header.height,
+                    depth: &depth.data,
+                    depth_unit_m: TOPIC_DEPTH_UNIT_M,
+                    points,
+                    estimate: None,
+                })?,
+            }
             stats.written += 1;
             if limits.max_frames.is_some_and(|max| stats.written >= max) {
                 break 'outer;
@@ -482,10 +558,23 @@ pub fn record_topic(
         }
     }
     match writer {
-        Some((recording, _)) => {
-            recording.finish().with_context(|| {
-                format!("cannot finish the recording {}", args.out_dir.display())
-            })?;
+        Some((mut sink, _)) => {
+            if let (Some(estimates), Sink::Mcap(mcap)) = (&estimates, &mut sink) {
+                // The estimates of the last clouds, published while they were written.
+                let settle = Instant::now() + Duration::from_millis(300);
+                while Instant::now() < settle && !stop.is_stopped() {
+                    match estimates.receive()? {
+                        Some(estimate) => {
+                            mcap.write_estimate(&estimate)?;
+                            stats.estimates += 1;
+                        }
+                        None => {
+                            estimates.listener().wait(Duration::from_millis(50))?;
+                        }
+                    }
+                }
+            }
+            sink.finish(&args.out_dir)?;
         }
         None => tracing::warn!("no cloud arrived; nothing was recorded"),
     }
@@ -546,6 +635,9 @@ pub fn run(args: &RecordArgs, stop: &StopFlag) -> anyhow::Result<RecordStats> {
         // Say so before touching the output directory.
         return record_kinect(args, &limits, stop);
     }
+    if args.format == RecordFormat::Mcap {
+        return record_mcap(args, &limits, stop);
+    }
     let created = prepare_out_dir(&args.out_dir)?;
     let result = match args.source {
         RecordSource::Topic => record_topic(args, &limits, stop),
@@ -564,6 +656,44 @@ pub fn run(args: &RecordArgs, stop: &StopFlag) -> anyhow::Result<RecordStats> {
         skipped = stats.skipped,
         interrupted = stats.stopped,
         out = %args.out_dir.display(),
+        "recording finished"
+    );
+    Ok(stats)
+}
+
+/// `--format mcap`: the cloud topic (and the estimates) into an MCAP file.
+fn record_mcap(
+    args: &RecordArgs,
+    limits: &RecordLimits,
+    stop: &StopFlag,
+) -> anyhow::Result<RecordStats> {
+    if args.source != RecordSource::Topic {
+        anyhow::bail!(
+            "--format mcap records the cloud topic only: record the Kinect into a recording \
+             (--format recording) and convert it with slope-convert RECORDING OUT.mcap"
+        );
+    }
+    let out = &args.out_dir;
+    if out.exists() {
+        anyhow::bail!(
+            "{} exists; give a new file name for the MCAP file",
+            out.display()
+        );
+    }
+    let parent = out.parent().filter(|p| !p.as_os_str().is_empty());
+    if parent.is_some_and(|p| !p.is_dir()) {
+        anyhow::bail!(
+            "cannot create {}: its directory does not exist",
+            out.display()
+        );
+    }
+    let stats = record_topic(args, limits, stop)?;
+    tracing::info!(
+        written = stats.written,
+        estimates = stats.estimates,
+        missed = stats.missed,
+        interrupted = stats.stopped,
+        out = %out.display(),
         "recording finished"
     );
     Ok(stats)
