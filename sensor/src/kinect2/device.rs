@@ -488,8 +488,11 @@ impl Streams {
         if self.color {
             types |= sys::f2s_frame_type::F2S_FRAME_COLOR.0;
         }
+        // IR is decoded with depth but nothing here uses it: not taking it
+        // lets libfreenect2 reuse its IR frame instead of allocating one
+        // for every frame set.
         if self.depth {
-            types |= sys::f2s_frame_type::F2S_FRAME_IR.0 | sys::f2s_frame_type::F2S_FRAME_DEPTH.0;
+            types |= sys::f2s_frame_type::F2S_FRAME_DEPTH.0;
         }
         types
     }
@@ -673,6 +676,24 @@ impl Device {
         check(status, "stop the streams", Some(&self.serial))
     }
 
+    /// Colour and depth frames libfreenect2 has delivered since the streams
+    /// first started, taken or not: `(colour, depth)`, `(0, 0)` before.
+    pub fn frame_counts(&self) -> (u64, u64) {
+        let Some(listener) = self.listener.as_ref() else {
+            return (0, 0);
+        };
+        let (mut color, mut depth) = (0u64, 0u64);
+        // SAFETY: the listener is alive; both out-pointers are writable. The
+        // shim reads the counters under the listener's own mutex.
+        let status =
+            unsafe { sys::f2s_listener_counts(listener.handle.as_ptr(), &mut color, &mut depth) };
+        if status == sys::f2s_status::F2S_OK {
+            (color, depth)
+        } else {
+            (0, 0)
+        }
+    }
+
     /// Waits up to `timeout` for a complete frame set; `Ok(None)` on timeout.
     pub fn wait_for_frames(
         &mut self,
@@ -683,6 +704,7 @@ impl Device {
                 action: "wait for frames before starting the streams",
                 serial: Some(self.serial.clone()),
                 status: ShimStatus(sys::f2s_status::F2S_ERR_NO_FRAME.0),
+                exception: None,
                 libfreenect2_log: None,
             });
         };
@@ -723,8 +745,8 @@ impl Drop for Device {
     }
 }
 
-/// A complete set of frames (depth and IR, and colour when streaming it),
-/// held until dropped.
+/// A complete set of frames (depth, and colour when streaming it), held
+/// until dropped.
 pub struct FrameSet<'d> {
     listener: NonNull<sys::f2s_listener>,
     serial: &'d str,
@@ -749,11 +771,6 @@ impl FrameSet<'_> {
     /// The depth frame: 512 x 424 float millimetres (mirrored, distorted).
     pub fn depth(&self) -> Option<FrameView<'_>> {
         self.frame(sys::f2s_frame_type::F2S_FRAME_DEPTH)
-    }
-
-    /// The IR frame: 512 x 424 float intensities.
-    pub fn ir(&self) -> Option<FrameView<'_>> {
-        self.frame(sys::f2s_frame_type::F2S_FRAME_IR)
     }
 
     /// The colour frame: 1920 x 1080, 4 bytes per pixel (BGRX or RGBX).

@@ -82,11 +82,18 @@ pub enum Kinect2Error {
         available: String,
     },
     /// A libfreenect2 operation failed.
-    #[error("failed to {action} (Kinect v2 {}): {status}{}", serial.as_deref().unwrap_or("-"), log_suffix(.libfreenect2_log))]
+    #[error(
+        "failed to {action} (Kinect v2 {}): {status}{}{}",
+        serial.as_deref().unwrap_or("-"),
+        exception_suffix(.exception),
+        log_suffix(.libfreenect2_log)
+    )]
     Operation {
         action: &'static str,
         serial: Option<String>,
         status: ShimStatus,
+        /// The text of the C++ exception the shim caught, if it caught one.
+        exception: Option<String>,
         libfreenect2_log: Option<String>,
     },
     /// A frame from the device does not have the layout libfreenect2 documents.
@@ -108,6 +115,13 @@ pub enum Kinect2Error {
     /// A serial number with an interior NUL byte.
     #[error("invalid serial number {0:?}")]
     InvalidSerial(String),
+}
+
+fn exception_suffix(exception: &Option<String>) -> String {
+    match exception {
+        Some(text) => format!(": {text}"),
+        None => String::new(),
+    }
 }
 
 fn log_suffix(log: &Option<String>) -> String {
@@ -136,12 +150,41 @@ pub(crate) fn check(
     if status.is_ok() {
         Ok(())
     } else {
+        let exception = if status.0 == sys::f2s_status::F2S_ERR_EXCEPTION.0 {
+            take_exception()
+        } else {
+            None
+        };
         Err(Kinect2Error::Operation {
             action,
             serial: serial.map(str::to_string),
             status,
+            exception,
             libfreenect2_log: log::take_last_problem(),
         })
+    }
+}
+
+/// The text of the last C++ exception the shim caught on this thread (and
+/// forgets it), if any.
+pub(crate) fn take_exception() -> Option<String> {
+    let mut buffer = vec![0u8; 256];
+    loop {
+        let mut length = 0usize;
+        // SAFETY: `buffer` holds `buffer.len()` writable bytes; `length` is
+        // writable. The text is thread-local in the shim.
+        let status = unsafe {
+            sys::f2s_take_exception(buffer.as_mut_ptr().cast(), buffer.len(), &mut length)
+        };
+        if status == sys::f2s_status::F2S_ERR_BUFFER_TOO_SMALL && length + 1 > buffer.len() {
+            buffer.resize(length + 1, 0);
+            continue;
+        }
+        if status != sys::f2s_status::F2S_OK {
+            return None;
+        }
+        buffer.truncate(length.min(buffer.len()));
+        return Some(String::from_utf8_lossy(&buffer).into_owned());
     }
 }
 
@@ -156,6 +199,7 @@ pub(crate) fn non_null<T>(
         action,
         serial: serial.map(str::to_string),
         status: ShimStatus(sys::f2s_status::F2S_ERR_NULL_ARGUMENT.0),
+        exception: None,
         libfreenect2_log: log::take_last_problem(),
     })
 }

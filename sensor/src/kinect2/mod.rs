@@ -38,6 +38,6 @@ pub use device::{
     DEPTH_HEIGHT, DEPTH_WIDTH,
 };
 pub use error::{Kinect2Error, ShimStatus};
-pub use log::LOG_TARGET;
+pub use log::{depth_pipeline_errors, LOG_TARGET};
 pub use registration::{validate_params, Registration, DEPTH_PIXELS};
 pub use source::{CaptureStats, Kinect2Options, Kinect2Source};
