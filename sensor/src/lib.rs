@@ -2,6 +2,7 @@
 //! frame sources (recordings, the Kinect v2) and the zero-copy publishing
 //! path into iceoryx2 shared memory.
 
+pub mod device_lock;
 pub mod error_chain;
 pub mod ipc;
 #[cfg(feature = "kinect2")]

@@ -7,6 +7,8 @@ use std::time::{Duration, Instant};
 
 use nix::sys::signal::Signal;
 use slope_integration_tests::{deadline, unique_prefix, Proc};
+use slope_sensor::device_lock::{DeviceLock, LOCK_DIR_ENV};
+use slope_sensor::kinect2::LOCK_KIND;
 
 #[test]
 fn no_kinect_is_a_clear_error_and_a_nonzero_exit_within_seconds() {
@@ -52,4 +54,31 @@ fn wait_for_device_retries_until_sigterm_then_exits_zero() {
     let diagnostics = capture.diagnostics();
     let status = status.unwrap_or_else(|| panic!("still running 1 s after SIGTERM\n{diagnostics}"));
     assert!(status.success(), "{status}\n{diagnostics}");
+}
+
+/// Another process holds the camera's lock (here: this test): a second
+/// slope-capture on the same serial is refused before libfreenect2 touches
+/// (and resets) the device, naming the holder's PID.
+#[test]
+fn a_camera_locked_by_another_process_is_refused_naming_its_pid() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let serial = "099999999999";
+    let _held = DeviceLock::acquire_in(dir.path(), LOCK_KIND, serial).expect("free lock");
+    let prefix = unique_prefix("capture-locked");
+    let lock_dir = dir.path().to_str().expect("utf-8 path");
+    let mut capture = Proc::spawn_with_env(
+        "slope-capture",
+        ["--service-prefix", &prefix, "--serial", serial],
+        &[(LOCK_DIR_ENV, lock_dir)],
+    );
+    let status = capture.wait_exit(deadline(10.0));
+    let diagnostics = capture.diagnostics();
+    let status = status.unwrap_or_else(|| panic!("still running\n{diagnostics}"));
+    assert!(!status.success(), "{diagnostics}");
+    let ours = format!("PID {}", std::process::id());
+    assert!(
+        diagnostics.contains(&ours) && diagnostics.contains("in use by another process"),
+        "{diagnostics}"
+    );
+    assert!(!diagnostics.contains("no Kinect v2 found"), "{diagnostics}");
 }

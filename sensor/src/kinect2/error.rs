@@ -109,6 +109,16 @@ pub enum Kinect2Error {
          before opening it again"
     )]
     AlreadyOpen { serial: String },
+    /// Another process has the device open (its lock file is held).
+    #[error(transparent)]
+    Locked(#[from] crate::device_lock::DeviceLockError),
+    /// libfreenect2 opened another device than the one asked for (after
+    /// its USB reset made the wanted one vanish, it re-opens by index).
+    #[error(
+        "asked libfreenect2 for Kinect v2 {requested} but it opened {opened} (the device vanished \
+         during its USB reset and libfreenect2 re-opened by index); closed it again"
+    )]
+    SerialMismatch { requested: String, opened: String },
     /// Camera parameters that libfreenect2's registration cannot use safely.
     #[error("invalid camera parameters: {0}")]
     InvalidParams(String),

@@ -33,9 +33,9 @@ pub use convert::{
     DEPTH_UNIT_M,
 };
 pub use device::{
-    library_version, ColorParams, Context, DepthConfig, Device, DeviceSelector, FrameFormat,
-    FrameSet, FrameView, IrParams, Pipeline, Streams, UnknownPipeline, COLOR_HEIGHT, COLOR_WIDTH,
-    DEPTH_HEIGHT, DEPTH_WIDTH,
+    check_opened_serial, library_version, ColorParams, Context, DepthConfig, Device,
+    DeviceSelector, FrameFormat, FrameSet, FrameView, IrParams, Pipeline, Streams, UnknownPipeline,
+    COLOR_HEIGHT, COLOR_WIDTH, DEPTH_HEIGHT, DEPTH_WIDTH, LOCK_KIND,
 };
 pub use error::{Kinect2Error, ShimStatus};
 pub use log::{depth_pipeline_errors, LOG_TARGET};

@@ -515,7 +515,9 @@ impl Drop for Kinect2Source {
     }
 }
 
-/// Errors worth retrying while waiting for a device.
+/// Errors worth retrying while waiting for a device (and when reopening
+/// it): it may appear, come back after its reset, or be let go by the
+/// process that holds it.
 fn is_retryable(err: &Kinect2Error) -> bool {
     matches!(
         err,
@@ -523,6 +525,8 @@ fn is_retryable(err: &Kinect2Error) -> bool {
             | Kinect2Error::SerialNotFound { .. }
             | Kinect2Error::IndexOutOfRange { .. }
             | Kinect2Error::Operation { .. }
+            | Kinect2Error::Locked(_)
+            | Kinect2Error::SerialMismatch { .. }
     )
 }
 
@@ -597,6 +601,10 @@ mod tests {
         assert!(!is_retryable(&Kinect2Error::InvalidParams("x".into())));
         assert!(!is_retryable(&Kinect2Error::AlreadyOpen {
             serial: "1".into()
+        }));
+        assert!(is_retryable(&Kinect2Error::SerialMismatch {
+            requested: "1".into(),
+            opened: "2".into(),
         }));
     }
 }
