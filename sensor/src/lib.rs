@@ -4,9 +4,11 @@
 
 pub mod device_lock;
 pub mod error_chain;
+pub mod interruptible;
 pub mod ipc;
 #[cfg(feature = "kinect2")]
 pub mod kinect2;
+pub mod missing_depth;
 pub mod projection;
 pub mod publish;
 pub mod recording;

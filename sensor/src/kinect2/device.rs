@@ -353,8 +353,9 @@ fn enumerate_locked(state: &ContextState) -> Result<Vec<String>, Kinect2Error> {
 }
 
 /// The libfreenect2 context: enumerates and opens devices. One context may
-/// be shared between threads; every call into libfreenect2 through it or
-/// its devices is serialised by one lock.
+/// be shared between threads (clones share it); every call into
+/// libfreenect2 through it or its devices is serialised by one lock.
+#[derive(Clone)]
 pub struct Context {
     inner: SharedContext,
 }

@@ -119,6 +119,28 @@ pub enum Kinect2Error {
          during its USB reset and libfreenect2 re-opened by index); closed it again"
     )]
     SerialMismatch { requested: String, opened: String },
+    /// The depth pipeline delivers no depth while the camera streams (colour
+    /// flows, or the decoder keeps logging errors): OpenCL/CUDA could not
+    /// initialise. Reconnecting cannot cure that.
+    #[error(
+        "Kinect v2 {serial}: the '{pipeline}' depth pipeline delivered no depth in {waited_s:.1} s \
+         while the camera streamed ({color_frames} colour frames, {pipeline_errors} depth decoder \
+         errors){}; the GPU decoder could not initialise (no OpenCL/CUDA driver, or a wrong \
+         --gpu-device?). Use --pipeline cpu (works everywhere, more CPU), or fix the GPU set-up",
+        log_suffix(.libfreenect2_log)
+    )]
+    DepthPipelineFailed {
+        serial: String,
+        pipeline: &'static str,
+        color_frames: u64,
+        pipeline_errors: u64,
+        waited_s: f64,
+        libfreenect2_log: Option<String>,
+    },
+    /// Opening on a thread of its own failed (the thread could not start or
+    /// panicked).
+    #[error("opening the Kinect v2 failed: {0}")]
+    Background(String),
     /// Camera parameters that libfreenect2's registration cannot use safely.
     #[error("invalid camera parameters: {0}")]
     InvalidParams(String),
