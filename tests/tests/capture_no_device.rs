@@ -82,3 +82,14 @@ fn a_camera_locked_by_another_process_is_refused_naming_its_pid() {
     );
     assert!(!diagnostics.contains("no Kinect v2 found"), "{diagnostics}");
 }
+
+#[test]
+fn list_says_no_kinect_found_on_stdout_and_exits_zero() {
+    let mut capture = Proc::spawn("slope-capture", ["--list"]);
+    let line = capture.stdout_line(deadline(10.0));
+    let status = capture.wait_exit(deadline(10.0));
+    let diagnostics = capture.diagnostics();
+    assert_eq!(line.as_deref(), Some("no Kinect v2 found"), "{diagnostics}");
+    assert!(status.is_some_and(|s| s.success()), "{diagnostics}");
+    assert_eq!(capture.stdout_line(deadline(1.0)), None, "one line only");
+}

@@ -9,10 +9,11 @@ use anyhow::Context;
 use clap::Parser;
 use serde::Deserialize;
 use slope_ipc_types::{Mount, DEFAULT_MAX_CLOUD_POINTS};
+use slope_sensor::device_lock::DeviceLock;
 use slope_sensor::ipc::{create_node, CloudPublisher};
 use slope_sensor::kinect2::{
     library_version, CaptureStats, Context as Freenect2, DepthConfig, DeviceSelector,
-    Kinect2Options, Kinect2Source, Pipeline,
+    Kinect2Options, Kinect2Source, Pipeline, LOCK_KIND,
 };
 use slope_sensor::publish::{publish_stream, Pacing, PublishOptions, PublishStats, StopFlag};
 use slope_sensor::source::FrameSource;
@@ -55,7 +56,9 @@ Config file (every key optional; command-line flags win):
   roll_deg = 0.0"
 )]
 pub struct CaptureArgs {
-    /// Print the serials of the connected Kinect v2 devices and exit.
+    /// Print the connected Kinect v2 devices on stdout, one per line
+    /// (`<serial> firmware <version>`), or "no Kinect v2 found", and exit.
+    /// A device another process streams is not opened (that would reset it).
     #[arg(long)]
     pub list: bool,
 
@@ -257,14 +260,25 @@ pub struct CaptureOutcome {
     pub stopped_waiting: bool,
 }
 
-/// Prints the connected devices' serials, one per line, on stdout.
+/// Prints the connected devices on stdout, one per line: `<serial> firmware
+/// <version>`, or "no Kinect v2 found". Reading the firmware version means
+/// opening the device, which resets it: a device whose lock another process
+/// holds is listed without opening it (`firmware unknown (in use by PID
+/// n)`).
 pub fn list_devices() -> anyhow::Result<Vec<String>> {
     let context = Freenect2::new().context("cannot start libfreenect2")?;
     let serials = context
         .enumerate()
         .context("cannot enumerate Kinect v2 devices")?;
+    if serials.is_empty() {
+        println!("no Kinect v2 found");
+    }
+    let lock_dir = DeviceLock::dir();
     for serial in &serials {
-        println!("{serial}");
+        println!(
+            "{serial} firmware {}",
+            firmware_of(&context, &lock_dir, serial)
+        );
     }
     tracing::info!(
         count = serials.len(),
@@ -272,6 +286,25 @@ pub fn list_devices() -> anyhow::Result<Vec<String>> {
         "Kinect v2 devices"
     );
     Ok(serials)
+}
+
+/// The firmware version of `serial`, or why it is unknown.
+fn firmware_of(context: &Freenect2, lock_dir: &Path, serial: &str) -> String {
+    if let Some(pid) = DeviceLock::holder_in(lock_dir, LOCK_KIND, serial) {
+        let pid = pid.map_or_else(|| "unknown".to_string(), |pid| pid.to_string());
+        return format!("unknown (in use by PID {pid})");
+    }
+    let selector = DeviceSelector::Serial(serial.to_string());
+    match context
+        .open(&selector, Pipeline::Cpu, None)
+        .and_then(|mut device| device.firmware_version())
+    {
+        Ok(firmware) => firmware,
+        Err(err) => {
+            tracing::warn!(serial, error = %err, "cannot read the firmware version");
+            format!("unknown ({err})")
+        }
+    }
 }
 
 pub fn run(args: &CaptureArgs, stop: &StopFlag) -> anyhow::Result<CaptureOutcome> {
