@@ -93,3 +93,87 @@ fn list_says_no_kinect_found_on_stdout_and_exits_zero() {
     assert!(status.is_some_and(|s| s.success()), "{diagnostics}");
     assert_eq!(capture.stdout_line(deadline(1.0)), None, "one line only");
 }
+
+/// Datagrams on `socket` until one starts with `until` or `by` passes.
+fn read_until(
+    socket: &std::os::unix::net::UnixDatagram,
+    seen: &mut Vec<String>,
+    until: &str,
+    by: Instant,
+) -> bool {
+    let mut buf = [0u8; 4096];
+    while Instant::now() < by {
+        if seen.iter().any(|m| m.lines().any(|l| l.starts_with(until))) {
+            return true;
+        }
+        if let Ok(n) = socket.recv(&mut buf) {
+            seen.push(String::from_utf8_lossy(&buf[..n]).into_owned());
+        }
+    }
+    seen.iter().any(|m| m.lines().any(|l| l.starts_with(until)))
+}
+
+/// The notify protocol of the real slope-capture without a device: while
+/// it waits for one it pings the watchdog and extends its start-up time
+/// (never READY=1: nothing streams), and on SIGTERM says STOPPING=1; a
+/// failed start leaves the reason in its status line.
+#[test]
+fn waiting_and_failing_are_told_to_systemd() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("notify.sock");
+    let socket = std::os::unix::net::UnixDatagram::bind(&path).expect("bind");
+    socket
+        .set_read_timeout(Some(Duration::from_millis(100)))
+        .expect("timeout");
+    let notify = path.to_str().expect("utf-8 path");
+    let prefix = unique_prefix("capture-notify");
+    let mut capture = Proc::spawn_with_env(
+        "slope-capture",
+        ["--service-prefix", &prefix, "--wait-for-device"],
+        &[("NOTIFY_SOCKET", notify), ("WATCHDOG_USEC", "400000")],
+    );
+    let mut seen = Vec::new();
+    assert!(
+        read_until(&socket, &mut seen, "EXTEND_TIMEOUT_USEC=", deadline(10.0)),
+        "{seen:?}\n{}",
+        capture.diagnostics()
+    );
+    assert!(
+        read_until(&socket, &mut seen, "WATCHDOG=1", deadline(5.0)),
+        "{seen:?}"
+    );
+    assert!(
+        seen.iter()
+            .any(|m| m.contains("STATUS=waiting for a Kinect v2")),
+        "{seen:?}"
+    );
+    capture.signal(Signal::SIGTERM);
+    assert!(
+        read_until(&socket, &mut seen, "STOPPING=1", deadline(5.0)),
+        "{seen:?}"
+    );
+    assert!(capture
+        .wait_exit(deadline(2.0))
+        .is_some_and(|s| s.success()));
+    assert!(!seen.iter().any(|m| m.contains("READY=1")), "{seen:?}");
+
+    let mut failing = Proc::spawn_with_env(
+        "slope-capture",
+        ["--service-prefix", &prefix],
+        &[("NOTIFY_SOCKET", notify)],
+    );
+    let mut seen = Vec::new();
+    assert!(
+        read_until(&socket, &mut seen, "STATUS=failed:", deadline(10.0)),
+        "{seen:?}\n{}",
+        failing.diagnostics()
+    );
+    let failed = seen
+        .iter()
+        .find(|m| m.starts_with("STATUS=failed:"))
+        .expect("found above");
+    assert!(failed.contains("no Kinect v2 found"), "{failed}");
+    assert!(failing
+        .wait_exit(deadline(5.0))
+        .is_some_and(|s| !s.success()));
+}

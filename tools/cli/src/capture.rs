@@ -15,8 +15,10 @@ use slope_sensor::kinect2::{
     library_version, CaptureStats, Context as Freenect2, DepthConfig, DeviceSelector,
     Kinect2Options, Kinect2Source, Pipeline, LOCK_KIND,
 };
-use slope_sensor::publish::{publish_stream, Pacing, PublishOptions, PublishStats, StopFlag};
+use slope_sensor::publish::{Pacing, PublishOptions, PublishStats, StopFlag};
 use slope_sensor::source::FrameSource;
+
+use crate::capture_notify::{publish_notifying, CaptureNotifier, SharedNotifier, SourceCounters};
 
 use crate::cli::{node_name, CommonArgs};
 use crate::mount_args::{check_mount, MountArgs};
@@ -307,11 +309,39 @@ fn firmware_of(context: &Freenect2, lock_dir: &Path, serial: &str) -> String {
     }
 }
 
+/// The counters of the status line.
+fn counters(stats: &CaptureStats) -> SourceCounters {
+    SourceCounters {
+        dropped: stats.bad_status + stats.malformed,
+        lost: stats.lost,
+        reconnects: stats.reconnects,
+        failed_opens: stats.failed_opens,
+    }
+}
+
+/// Runs the capture as a systemd notify daemon (see `capture_notify`):
+/// `READY=1` after the first published cloud, the watchdog from every wait,
+/// a status line a second, `STATUS=failed: ...` and `STOPPING=1` on the way
+/// out. Outside systemd the notifications go nowhere.
 pub fn run(args: &CaptureArgs, stop: &StopFlag) -> anyhow::Result<CaptureOutcome> {
     if args.list {
         list_devices()?;
         return Ok(CaptureOutcome::default());
     }
+    let notifier = CaptureNotifier::from_env();
+    let result = capture(args, stop, &notifier);
+    if let Err(err) = &result {
+        notifier.borrow_mut().failed(&format!("{err:#}"));
+    }
+    notifier.borrow().stopping();
+    result
+}
+
+fn capture(
+    args: &CaptureArgs,
+    stop: &StopFlag,
+    notifier: &SharedNotifier,
+) -> anyhow::Result<CaptureOutcome> {
     let config = match &args.config {
         Some(path) => CaptureConfig::load(path)?,
         None => CaptureConfig::default(),
@@ -325,8 +355,12 @@ pub fn run(args: &CaptureArgs, stop: &StopFlag) -> anyhow::Result<CaptureOutcome
         libfreenect2 = library_version(),
         "opening the Kinect v2"
     );
-    let Some(mut source) =
-        Kinect2Source::open(options, stop.clone()).context("cannot start the Kinect v2")?
+    let hook_notifier = SharedNotifier::clone(notifier);
+    let on_wait = Box::new(move |stats: &CaptureStats| {
+        hook_notifier.borrow_mut().on_wait(counters(stats));
+    });
+    let Some(mut source) = Kinect2Source::open_watched(options, stop.clone(), on_wait)
+        .context("cannot start the Kinect v2")?
     else {
         tracing::info!("stopped before a Kinect v2 appeared");
         return Ok(CaptureOutcome {
@@ -348,7 +382,7 @@ pub fn run(args: &CaptureArgs, stop: &StopFlag) -> anyhow::Result<CaptureOutcome
         max_frames: args.max_frames,
         ..PublishOptions::default()
     };
-    let result = publish_stream(&mut source, &publisher, &options, stop);
+    let result = publish_notifying(&mut source, &publisher, &options, stop, notifier);
     // Stop the streams (then free the listener) before reporting.
     source.close();
     let capture = source.stats();
