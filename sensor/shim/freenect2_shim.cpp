@@ -20,6 +20,7 @@
 #include <map>
 #include <mutex>
 #include <set>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -307,6 +308,13 @@ struct f2s_registration {
 extern "C" {
 
 const char *f2s_version(void) { return LIBFREENECT2_VERSION; }
+
+f2s_status f2s_selftest_throw(const char *message) {
+  F2S_GUARD_BEGIN
+  if (message) throw std::runtime_error(message);
+  throw 42;  // not a std::exception
+  F2S_GUARD_END
+}
 
 f2s_status f2s_take_exception(char *buffer, size_t capacity, size_t *length) {
   if (!length) return F2S_ERR_NULL_ARGUMENT;

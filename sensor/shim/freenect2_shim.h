@@ -144,6 +144,11 @@ const char *f2s_version(void);
  * F2S_ERR_NOT_FOUND when there is none. */
 f2s_status f2s_take_exception(char *buffer, size_t capacity, size_t *length);
 
+/* For the tests of the exception path: throws std::runtime_error(message)
+ * (an int when message is NULL) inside the shim's guard and returns what the
+ * guard makes of it (F2S_ERR_EXCEPTION). */
+f2s_status f2s_selftest_throw(const char *message);
+
 /* 1 when this libfreenect2 was built with the pipeline, else 0. */
 int32_t f2s_pipeline_available(f2s_pipeline pipeline);
 

@@ -235,3 +235,46 @@ pub(crate) fn non_null<T>(
         libfreenect2_log: log::take_last_problem(),
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn throw(message: Option<&std::ffi::CStr>) -> Result<(), Kinect2Error> {
+        let pointer = message.map_or(std::ptr::null(), std::ffi::CStr::as_ptr);
+        // SAFETY: `pointer` is null or a NUL-terminated string that outlives
+        // the call; the shim catches what it throws.
+        let status = unsafe { sys::f2s_selftest_throw(pointer) };
+        check(status, "run the exception self-test", Some("test"))
+    }
+
+    #[test]
+    fn the_text_of_a_caught_exception_reaches_the_error_of_its_thread_only() {
+        let err = throw(Some(c"LIBUSB_ERROR_NO_MEM in the shim")).expect_err("threw");
+        match &err {
+            Kinect2Error::Operation { exception, .. } => {
+                assert_eq!(
+                    exception.as_deref(),
+                    Some("LIBUSB_ERROR_NO_MEM in the shim")
+                );
+            }
+            other => panic!("expected Operation, got {other:?}"),
+        }
+        assert!(
+            err.to_string().contains("LIBUSB_ERROR_NO_MEM in the shim"),
+            "{err}"
+        );
+        // Taken once; another thread's exception is not ours.
+        assert_eq!(take_exception(), None);
+        std::thread::spawn(|| {
+            // SAFETY: as above.
+            let status = unsafe { sys::f2s_selftest_throw(c"elsewhere".as_ptr()) };
+            assert_eq!(status, sys::f2s_status::F2S_ERR_EXCEPTION);
+        })
+        .join()
+        .expect("thread");
+        assert_eq!(take_exception(), None);
+        let err = throw(None).expect_err("threw an int");
+        assert!(err.to_string().contains("unknown type"), "{err}");
+    }
+}
