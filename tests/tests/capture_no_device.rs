@@ -177,3 +177,31 @@ fn waiting_and_failing_are_told_to_systemd() {
         .wait_exit(deadline(5.0))
         .is_some_and(|s| !s.success()));
 }
+
+/// A pipeline this libfreenect2 lacks is refused before any device is
+/// touched, with exit status 78 (EX_CONFIG: a restart cannot cure it).
+#[test]
+fn a_pipeline_that_is_not_built_in_exits_with_ex_config() {
+    use slope_sensor::kinect2::Pipeline;
+    let Some(missing) = [Pipeline::OpenCl, Pipeline::Cuda, Pipeline::OpenGl]
+        .into_iter()
+        .find(|p| !p.is_available())
+    else {
+        eprintln!("skipped: this libfreenect2 has every GPU pipeline");
+        return;
+    };
+    let prefix = unique_prefix("capture-pipeline");
+    let mut capture = Proc::spawn(
+        "slope-capture",
+        ["--service-prefix", &prefix, "--pipeline", missing.name()],
+    );
+    let status = capture.wait_exit(deadline(10.0));
+    let diagnostics = capture.diagnostics();
+    let status = status.unwrap_or_else(|| panic!("still running\n{diagnostics}"));
+    assert_eq!(status.code(), Some(78), "{diagnostics}");
+    assert!(
+        diagnostics.contains("not built into this libfreenect2")
+            && diagnostics.contains("available: default, cpu"),
+        "{diagnostics}"
+    );
+}

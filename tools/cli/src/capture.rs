@@ -309,6 +309,34 @@ fn firmware_of(context: &Freenect2, lock_dir: &Path, serial: &str) -> String {
     }
 }
 
+/// Exit status for failures that restarting cannot cure (a depth pipeline
+/// that is not built in or cannot initialise): `EX_CONFIG` (78), so that a
+/// unit with `RestartPreventExitStatus=78` stays failed instead of
+/// restarting every few seconds.
+pub const EXIT_CONFIG: u8 = 78;
+
+/// [`EXIT_CONFIG`] when `err` is a failure that restarting cannot cure.
+pub fn config_exit_code(err: &anyhow::Error) -> Option<u8> {
+    use slope_sensor::kinect2::Kinect2Error;
+    use slope_sensor::publish::PublishError;
+    use slope_sensor::source::SourceError;
+    let lasting = |err: &Kinect2Error| {
+        matches!(
+            err,
+            Kinect2Error::DepthPipelineFailed { .. } | Kinect2Error::PipelineUnavailable { .. }
+        )
+    };
+    err.chain()
+        .any(|cause| {
+            cause.downcast_ref::<Kinect2Error>().is_some_and(lasting)
+                || matches!(
+                    cause.downcast_ref::<PublishError>(),
+                    Some(PublishError::Source(SourceError::Kinect2(inner))) if lasting(inner)
+                )
+        })
+        .then_some(EXIT_CONFIG)
+}
+
 /// The counters of the status line.
 fn counters(stats: &CaptureStats) -> SourceCounters {
     SourceCounters {
@@ -451,6 +479,31 @@ mod tests {
         assert_eq!(overridden.pipeline, Pipeline::OpenCl);
         assert_eq!(overridden.depth.max_depth_m, 4.0);
         assert_eq!(overridden.mount.pitch_deg, -20.0);
+    }
+
+    #[test]
+    fn a_broken_depth_pipeline_exits_with_ex_config() {
+        use slope_sensor::kinect2::Kinect2Error;
+        use slope_sensor::publish::PublishError;
+        use slope_sensor::source::SourceError;
+        let failed = || Kinect2Error::DepthPipelineFailed {
+            serial: "1".into(),
+            pipeline: "cl",
+            color_frames: 60,
+            pipeline_errors: 60,
+            waited_s: 2.0,
+            libfreenect2_log: None,
+        };
+        let while_streaming = anyhow::Error::new(PublishError::Source(SourceError::from(failed())))
+            .context("capture from Kinect v2 1 failed");
+        assert_eq!(config_exit_code(&while_streaming), Some(EXIT_CONFIG));
+        let at_open = anyhow::Error::new(failed()).context("cannot start the Kinect v2");
+        assert_eq!(config_exit_code(&at_open), Some(EXIT_CONFIG));
+        let lost = anyhow::Error::new(Kinect2Error::NoDevice {
+            version: "0.2.0".into(),
+            libfreenect2_log: None,
+        });
+        assert_eq!(config_exit_code(&lost), None);
     }
 
     #[test]
