@@ -6,6 +6,10 @@
 //! `shim/` with the `cc` crate and generates Rust bindings for the shim's
 //! header with bindgen into `$OUT_DIR/freenect2_shim.rs`. It never touches the
 //! network.
+//!
+//! It reruns when the shim changes and when libfreenect2 is reinstalled: it
+//! watches libfreenect2's `config.h` (which pipelines the shim compiles in)
+//! and its library file (see `build_support/freenect2_files.rs`).
 
 fn main() {
     #[cfg(feature = "kinect2")]
@@ -13,8 +17,16 @@ fn main() {
 }
 
 #[cfg(feature = "kinect2")]
+#[path = "build_support/freenect2_files.rs"]
+// `pipelines_in_config_h` is for the tests (tests/build_script.rs).
+#[allow(dead_code)]
+mod freenect2_files;
+
+#[cfg(feature = "kinect2")]
 mod kinect2 {
     use std::path::{Path, PathBuf};
+
+    use super::freenect2_files::watched_files;
 
     /// Overrides pkg-config: libfreenect2's install prefix (with `include/`
     /// and `lib/` below it).
@@ -25,6 +37,7 @@ mod kinect2 {
     /// Where libfreenect2's headers and library are.
     struct Freenect2Paths {
         include_dirs: Vec<PathBuf>,
+        lib_dirs: Vec<PathBuf>,
     }
 
     pub fn build() {
@@ -36,6 +49,7 @@ mod kinect2 {
             Ok(paths) => paths,
             Err(reason) => fail(&reason),
         };
+        watch_installed(&paths);
 
         let mut shim = cc::Build::new();
         shim.cpp(true)
@@ -120,6 +134,7 @@ mod kinect2 {
         }
         Ok(Freenect2Paths {
             include_dirs: library.include_paths,
+            lib_dirs: library.link_paths,
         })
     }
 
@@ -151,7 +166,38 @@ mod kinect2 {
         println!("cargo:rustc-link-search=native={}", lib_dir.display());
         Ok(Freenect2Paths {
             include_dirs: vec![include],
+            lib_dirs: vec![lib_dir],
         })
+    }
+
+    /// Reruns the build script when libfreenect2's `config.h` or library
+    /// changes (a reinstall with other pipelines), and tells the crate's
+    /// tests which `config.h` the shim was compiled against.
+    fn watch_installed(paths: &Freenect2Paths) {
+        let watched = watched_files(&paths.include_dirs, &paths.lib_dirs);
+        for file in &watched {
+            println!("cargo:rerun-if-changed={}", file.display());
+        }
+        match watched.iter().find(|f| f.ends_with("config.h")) {
+            Some(config_h) => {
+                println!(
+                    "cargo:rustc-env=SLOPE_FREENECT2_CONFIG_H={}",
+                    config_h.display()
+                )
+            }
+            None => println!(
+                "cargo:warning=libfreenect2/config.h not found under {:?}; the shim will not be \
+                 rebuilt when libfreenect2 is reinstalled (run `cargo clean -p slope-sensor` then)",
+                paths.include_dirs
+            ),
+        }
+        if !watched.iter().any(|f| !f.ends_with("config.h")) {
+            println!(
+                "cargo:warning=libfreenect2's library not found under {:?}; the shim will not be \
+                 rebuilt when libfreenect2 is reinstalled",
+                paths.lib_dirs
+            );
+        }
     }
 
     /// Stops the build with a message that says what to do.

@@ -16,17 +16,35 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstring>
+#include <exception>
 #include <map>
 #include <mutex>
 #include <set>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace {
+
+// The text of the last exception a shim call on this thread caught, for
+// f2s_take_exception (thread-local: another thread's failure never shows up
+// in this thread's error).
+thread_local std::string g_last_exception;
+
+void remember_exception(const char *what) {
+  try {
+    g_last_exception = what ? what : "";
+  } catch (...) {
+    // No memory for the text: the status still says an exception happened.
+  }
+}
 
 const size_t kDepthWidth = 512;
 const size_t kDepthHeight = 424;
 const size_t kColorWidth = 1920;
 const size_t kColorHeight = 1080;
+// Registration's filter map: the colour image with one row above and below.
+const size_t kBigDepthHeight = 1082;
 
 // Forwards libfreenect2's log lines to a C callback.
 class CallbackLogger : public libfreenect2::Logger {
@@ -168,7 +186,7 @@ struct f2s_device {
 class TimedFrameListener : public libfreenect2::FrameListener {
  public:
   explicit TimedFrameListener(unsigned int types)
-      : subscribed_(types), ready_(0), released_(true) {}
+      : subscribed_(types), ready_(0), released_(true), color_frames_(0), depth_frames_(0) {}
 
   virtual ~TimedFrameListener() {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -179,6 +197,11 @@ class TimedFrameListener : public libfreenect2::FrameListener {
     if ((subscribed_ & static_cast<unsigned int>(type)) == 0) return false;
     {
       std::lock_guard<std::mutex> lock(mutex_);
+      // Counted whether or not the frame is taken: they tell whether a
+      // stream flows at all (colour arriving while depth never does is a
+      // depth pipeline that failed to initialise).
+      if (type == libfreenect2::Frame::Color) ++color_frames_;
+      if (type == libfreenect2::Frame::Depth) ++depth_frames_;
       if (!released_) return false;
       libfreenect2::FrameMap::iterator it = pending_.find(type);
       if (it != pending_.end()) {
@@ -208,6 +231,12 @@ class TimedFrameListener : public libfreenect2::FrameListener {
     return true;
   }
 
+  void counts(uint64_t *color, uint64_t *depth) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    *color = color_frames_;
+    *depth = depth_frames_;
+  }
+
   // Deletes a set taken by wait and accepts frames again.
   void release(libfreenect2::FrameMap &frames) {
     delete_all(frames);
@@ -229,6 +258,8 @@ class TimedFrameListener : public libfreenect2::FrameListener {
   const unsigned int subscribed_;
   unsigned int ready_;
   bool released_;
+  uint64_t color_frames_;
+  uint64_t depth_frames_;
 };
 
 struct f2s_listener {
@@ -238,23 +269,61 @@ struct f2s_listener {
   bool holding;
 };
 
+// The registration with the buffers Registration::apply would otherwise
+// allocate (and free) on every call: the filter map (1920 x 1082 floats,
+// 8.3 MB) and the colour offset of each depth pixel (512 x 424 ints).
 struct f2s_registration {
   f2s_registration(const libfreenect2::Freenect2Device::IrCameraParams &ir,
                    const libfreenect2::Freenect2Device::ColorCameraParams &color)
-      : registration(ir, color) {}
+      : registration(ir, color),
+        big_depth(kColorWidth, kBigDepthHeight, 4),
+        color_depth_map(kDepthWidth * kDepthHeight) {}
   libfreenect2::Registration registration;
+  libfreenect2::Frame big_depth;
+  std::vector<int> color_depth_map;
 };
 
 #define F2S_GUARD_BEGIN try {
-#define F2S_GUARD_END \
-  }                   \
-  catch (...) {       \
-    return F2S_ERR_EXCEPTION; \
+#define F2S_GUARD_END                                   \
+  }                                                     \
+  catch (const std::exception &e) {                     \
+    remember_exception(e.what());                       \
+    return F2S_ERR_EXCEPTION;                           \
+  }                                                     \
+  catch (...) {                                         \
+    remember_exception("an exception of unknown type"); \
+    return F2S_ERR_EXCEPTION;                           \
+  }
+
+// For the functions that return nothing: keeps the text for
+// f2s_take_exception and never unwinds.
+#define F2S_VOID_CATCH                                  \
+  catch (const std::exception &e) {                     \
+    remember_exception(e.what());                       \
+  }                                                     \
+  catch (...) {                                         \
+    remember_exception("an exception of unknown type"); \
   }
 
 extern "C" {
 
 const char *f2s_version(void) { return LIBFREENECT2_VERSION; }
+
+f2s_status f2s_selftest_throw(const char *message) {
+  F2S_GUARD_BEGIN
+  if (message) throw std::runtime_error(message);
+  throw 42;  // not a std::exception
+  F2S_GUARD_END
+}
+
+f2s_status f2s_take_exception(char *buffer, size_t capacity, size_t *length) {
+  if (!length) return F2S_ERR_NULL_ARGUMENT;
+  *length = 0;
+  if (g_last_exception.empty()) return F2S_ERR_NOT_FOUND;
+  f2s_status status = copy_string(g_last_exception, buffer, capacity, length);
+  if (status == F2S_OK) g_last_exception.clear();
+  return status;
+}
 
 int32_t f2s_pipeline_available(f2s_pipeline pipeline) {
   switch (pipeline) {
@@ -303,11 +372,11 @@ f2s_status f2s_context_new(f2s_context **out) {
 }
 
 void f2s_context_free(f2s_context *context) {
+  // A destructor that throws leaves nothing to recover; never unwind into Rust.
   try {
     delete context;
-  } catch (...) {
-    // A destructor that throws leaves nothing to recover; never unwind into Rust.
   }
+  F2S_VOID_CATCH
 }
 
 f2s_status f2s_context_enumerate(f2s_context *context, int32_t *count) {
@@ -366,13 +435,12 @@ f2s_status f2s_context_open_serial(f2s_context *context, const char *serial, f2s
 
 void f2s_device_free(f2s_device *device) {
   if (!device) return;
+  // The destructor closes the device (stopping it first) and deletes its
+  // pipeline, which joins the processing threads.
   try {
-    // The destructor closes the device (stopping it first) and deletes its
-    // pipeline, which joins the processing threads.
     delete device->device;
-  } catch (...) {
-    // Nothing to recover; never unwind into Rust.
   }
+  F2S_VOID_CATCH
   delete device;
 }
 
@@ -415,7 +483,8 @@ void f2s_config_default(f2s_config *out) {
     out->bilateral_filter = config.EnableBilateralFilter ? 1 : 0;
     out->edge_aware_filter = config.EnableEdgeAwareFilter ? 1 : 0;
   } catch (...) {
-    // The constructor only assigns four fields; fall back to its documented values.
+    // The constructor only assigns four fields and cannot throw; fall back to
+    // its documented values all the same.
     out->min_depth_m = 0.5f;
     out->max_depth_m = 4.5f;
     out->bilateral_filter = 1;
@@ -478,11 +547,11 @@ f2s_status f2s_listener_new(uint32_t frame_types, f2s_listener **out) {
 
 void f2s_listener_release(f2s_listener *listener) {
   if (!listener || !listener->holding) return;
+  // release() only deletes frames; nothing to recover.
   try {
     listener->listener.release(listener->frames);
-  } catch (...) {
-    // release() only deletes frames; nothing to recover.
   }
+  F2S_VOID_CATCH
   listener->frames.clear();
   listener->holding = false;
 }
@@ -492,9 +561,8 @@ void f2s_listener_free(f2s_listener *listener) {
   f2s_listener_release(listener);
   try {
     delete listener;
-  } catch (...) {
-    // Nothing to recover; never unwind into Rust.
   }
+  F2S_VOID_CATCH
 }
 
 f2s_status f2s_listener_wait(f2s_listener *listener, int32_t timeout_ms) {
@@ -503,6 +571,14 @@ f2s_status f2s_listener_wait(f2s_listener *listener, int32_t timeout_ms) {
   F2S_GUARD_BEGIN
   if (!listener->listener.wait(listener->frames, timeout_ms)) return F2S_ERR_TIMEOUT;
   listener->holding = true;
+  return F2S_OK;
+  F2S_GUARD_END
+}
+
+f2s_status f2s_listener_counts(f2s_listener *listener, uint64_t *color, uint64_t *depth) {
+  if (!listener || !color || !depth) return F2S_ERR_NULL_ARGUMENT;
+  F2S_GUARD_BEGIN
+  listener->listener.counts(color, depth);
   return F2S_OK;
   F2S_GUARD_END
 }
@@ -543,12 +619,11 @@ f2s_status f2s_registration_new(const f2s_ir_params *ir, const f2s_color_params 
 void f2s_registration_free(f2s_registration *registration) {
   try {
     delete registration;
-  } catch (...) {
-    // Nothing to recover; never unwind into Rust.
   }
+  F2S_VOID_CATCH
 }
 
-f2s_status f2s_registration_apply(const f2s_registration *registration, const f2s_frame_view *color,
+f2s_status f2s_registration_apply(f2s_registration *registration, const f2s_frame_view *color,
                                   const f2s_frame_view *depth, f2s_image *undistorted,
                                   f2s_image *registered, int32_t enable_filter) {
   if (!registration || !color || !depth || !undistorted || !registered)
@@ -564,7 +639,8 @@ f2s_status f2s_registration_apply(const f2s_registration *registration, const f2
   libfreenect2::Frame undistorted_frame(kDepthWidth, kDepthHeight, 4, undistorted->data);
   libfreenect2::Frame registered_frame(kDepthWidth, kDepthHeight, 4, registered->data);
   registration->registration.apply(&color_frame, &depth_frame, &undistorted_frame,
-                                   &registered_frame, enable_filter != 0);
+                                   &registered_frame, enable_filter != 0,
+                                   &registration->big_depth, &registration->color_depth_map[0]);
   return F2S_OK;
   F2S_GUARD_END
 }

@@ -2,7 +2,8 @@
  * A small C interface over libfreenect2's C++ API, for bindgen.
  *
  * Every function catches C++ exceptions and reports them as F2S_ERR_EXCEPTION,
- * so nothing unwinds into Rust. Handles are opaque; each `*_new`/`*_open`
+ * so nothing unwinds into Rust; f2s_take_exception gives the exception's text
+ * (what()) to the thread that made the call. Handles are opaque; each `*_new`/`*_open`
  * has a matching `*_free`. Nothing here keeps global state except the log
  * forwarding installed by f2s_set_log_callback.
  *
@@ -138,6 +139,16 @@ typedef void (*f2s_log_fn)(int32_t level, const char *message, size_t length, vo
 /* libfreenect2's version string, e.g. "0.2.0" (static storage). */
 const char *f2s_version(void);
 
+/* The text of the last exception a shim call on this thread caught (also in
+ * the functions that return nothing, e.g. the *_free ones), then forgets it.
+ * F2S_ERR_NOT_FOUND when there is none. */
+f2s_status f2s_take_exception(char *buffer, size_t capacity, size_t *length);
+
+/* For the tests of the exception path: throws std::runtime_error(message)
+ * (an int when message is NULL) inside the shim's guard and returns what the
+ * guard makes of it (F2S_ERR_EXCEPTION). */
+f2s_status f2s_selftest_throw(const char *message);
+
 /* 1 when this libfreenect2 was built with the pipeline, else 0. */
 int32_t f2s_pipeline_available(f2s_pipeline pipeline);
 
@@ -182,6 +193,10 @@ void f2s_listener_free(f2s_listener *listener);
 /* Waits up to timeout_ms for a complete frame set (F2S_ERR_TIMEOUT if none).
  * Frames held from an earlier wait are released first. */
 f2s_status f2s_listener_wait(f2s_listener *listener, int32_t timeout_ms);
+/* Colour and depth frames libfreenect2 delivered to the listener so far,
+ * taken or not (colour that flows while depth never comes is a depth
+ * pipeline that could not initialise). */
+f2s_status f2s_listener_counts(f2s_listener *listener, uint64_t *color, uint64_t *depth);
 /* A view of one held frame (F2S_ERR_NO_FRAME if the set lacks it). */
 f2s_status f2s_listener_frame(const f2s_listener *listener, f2s_frame_type type, f2s_frame_view *out);
 /* Gives the held frames back to libfreenect2. */
@@ -192,8 +207,10 @@ f2s_status f2s_registration_new(const f2s_ir_params *ir, const f2s_color_params 
 void f2s_registration_free(f2s_registration *registration);
 /* Registration::apply: `depth` (512x424 float mm) and `color` (1920x1080x4)
  * in, `undistorted` (512x424x4) and `registered` (512x424x4) out. The output
- * images must be 512x424 with 4 bytes per pixel. */
-f2s_status f2s_registration_apply(const f2s_registration *registration, const f2s_frame_view *color,
+ * images must be 512x424 with 4 bytes per pixel. Reuses the registration's
+ * own filter map and offset buffers (nothing is allocated per call), so one
+ * registration must not be applied from two threads at once. */
+f2s_status f2s_registration_apply(f2s_registration *registration, const f2s_frame_view *color,
                                   const f2s_frame_view *depth, f2s_image *undistorted,
                                   f2s_image *registered, int32_t enable_filter);
 /* Registration::undistortDepth: depth in, undistorted depth (512x424x4) out. */

@@ -2,10 +2,13 @@
 //! frame sources (recordings, the Kinect v2) and the zero-copy publishing
 //! path into iceoryx2 shared memory.
 
+pub mod device_lock;
 pub mod error_chain;
+pub mod interruptible;
 pub mod ipc;
 #[cfg(feature = "kinect2")]
 pub mod kinect2;
+pub mod missing_depth;
 pub mod projection;
 pub mod publish;
 pub mod recording;

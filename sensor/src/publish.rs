@@ -116,6 +116,18 @@ pub fn publish_stream(
     options: &PublishOptions,
     stop: &StopFlag,
 ) -> Result<PublishStats, PublishError> {
+    publish_stream_observed(source, publisher, options, stop, &mut |_| {})
+}
+
+/// [`publish_stream`], calling `on_published` with the counters after every
+/// frame sent (a daemon's readiness and status report).
+pub fn publish_stream_observed(
+    source: &mut dyn FrameSource,
+    publisher: &CloudPublisher,
+    options: &PublishOptions,
+    stop: &StopFlag,
+    on_published: &mut dyn FnMut(&PublishStats),
+) -> Result<PublishStats, PublishError> {
     let mut stats = PublishStats::default();
     if !wait_for_subscribers(publisher, options, stop)? {
         stats.stopped = true;
@@ -168,6 +180,7 @@ pub fn publish_stream(
         publisher.publish(&frame)?;
         sent_at_rate += 1;
         stats.published += 1;
+        on_published(&stats);
         tracing::debug!(
             frame = frame.index,
             subscribers = publisher.subscriber_count(),

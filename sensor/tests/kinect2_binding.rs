@@ -310,7 +310,7 @@ fn undistortion_follows_the_brown_model() {
 
 #[test]
 fn registration_maps_colour_through_the_calibration_polynomial() {
-    let registration =
+    let mut registration =
         Registration::new(&ir_params(false), &one_to_one_color_params()).expect("registration");
     let depth = synthetic_depth();
     let depth_bytes = as_bytes(&depth);
@@ -407,6 +407,21 @@ fn registration_maps_colour_through_the_calibration_polynomial() {
     }
     // The ring around the square: (104 x 102) - (100 x 100) pixels.
     assert_eq!(hidden, 104 * 102 - 100 * 100);
+
+    // The filter map and colour offsets are reused from call to call: a
+    // second filtered frame comes out the same.
+    let first = registered.clone();
+    registered.fill(u32::MAX);
+    registration
+        .apply(
+            &color_view,
+            &scene_view,
+            &mut undistorted,
+            &mut registered,
+            true,
+        )
+        .expect("apply again");
+    assert_eq!(registered, first);
 }
 
 #[test]

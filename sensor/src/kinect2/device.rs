@@ -23,6 +23,7 @@ use std::time::Duration;
 use super::error::{check, non_null, Kinect2Error, ShimStatus};
 use super::log;
 use super::sys;
+use crate::device_lock::DeviceLock;
 
 /// Width of the depth and IR images, pixels.
 pub const DEPTH_WIDTH: usize = 512;
@@ -313,6 +314,21 @@ fn lock(context: &SharedContext) -> MutexGuard<'_, ContextState> {
         .unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
+/// The kind of device in lock file names (`slope-kinect2-<serial>.lock`).
+pub const LOCK_KIND: &str = "kinect2";
+
+/// `Ok` when libfreenect2 opened the device that was asked for.
+pub fn check_opened_serial(requested: &str, opened: &str) -> Result<(), Kinect2Error> {
+    if requested == opened {
+        Ok(())
+    } else {
+        Err(Kinect2Error::SerialMismatch {
+            requested: requested.to_string(),
+            opened: opened.to_string(),
+        })
+    }
+}
+
 /// The serials of the enumerated devices (the caller holds the lock).
 fn enumerate_locked(state: &ContextState) -> Result<Vec<String>, Kinect2Error> {
     let context = state.handle.as_ptr();
@@ -337,8 +353,9 @@ fn enumerate_locked(state: &ContextState) -> Result<Vec<String>, Kinect2Error> {
 }
 
 /// The libfreenect2 context: enumerates and opens devices. One context may
-/// be shared between threads; every call into libfreenect2 through it or
-/// its devices is serialised by one lock.
+/// be shared between threads (clones share it); every call into
+/// libfreenect2 through it or its devices is serialised by one lock.
+#[derive(Clone)]
 pub struct Context {
     inner: SharedContext,
 }
@@ -376,7 +393,12 @@ impl Context {
     /// Opens a device with a depth pipeline. `gpu_device` picks the OpenCL
     /// or CUDA device (`None`: libfreenect2's default). A device that is
     /// already open through this context is refused
-    /// ([`Kinect2Error::AlreadyOpen`]).
+    /// ([`Kinect2Error::AlreadyOpen`]), and so is one that another process
+    /// has open ([`Kinect2Error::Locked`], naming its PID): the device's
+    /// [`DeviceLock`] is taken before libfreenect2 resets it, and held as long
+    /// as the [`Device`] lives. A device other than the one asked for
+    /// (libfreenect2 re-opens by index when the wanted one vanishes during
+    /// its reset) is closed again: [`Kinect2Error::SerialMismatch`].
     pub fn open(
         &self,
         selector: &DeviceSelector,
@@ -393,6 +415,11 @@ impl Context {
                     .join(", "),
             });
         }
+        // A known serial is locked before anything touches the USB bus.
+        let mut device_lock = match selector {
+            DeviceSelector::Serial(serial) => Some(DeviceLock::acquire(LOCK_KIND, serial)?),
+            _ => None,
+        };
         // One lock from enumeration to the open: nothing else in this
         // process can open or free a device in between.
         let mut state = lock(&self.inner);
@@ -427,6 +454,15 @@ impl Context {
         let c_serial = std::ffi::CString::new(serial.as_str())
             .map_err(|_| Kinect2Error::InvalidSerial(serial.clone()))?;
         state.open.claim(&serial)?;
+        if device_lock.is_none() {
+            match DeviceLock::acquire(LOCK_KIND, &serial) {
+                Ok(taken) => device_lock = Some(taken),
+                Err(err) => {
+                    state.open.release(&serial);
+                    return Err(err.into());
+                }
+            }
+        }
         let gpu = gpu_device.map_or(-1, |id| i32::try_from(id).unwrap_or(i32::MAX));
         let mut raw = std::ptr::null_mut();
         log::clear_last_problem();
@@ -454,7 +490,7 @@ impl Context {
             }
         };
         drop(state);
-        Ok(Device {
+        let device = Device {
             handle,
             context: Arc::clone(&self.inner),
             serial,
@@ -462,7 +498,11 @@ impl Context {
             listener: None,
             retired_listeners: Vec::new(),
             streaming: false,
-        })
+            _lock: device_lock,
+        };
+        // Dropping a mismatched device closes it (and releases the claim).
+        check_opened_serial(&device.serial, &device.opened_serial()?)?;
+        Ok(device)
     }
 }
 
@@ -488,8 +528,11 @@ impl Streams {
         if self.color {
             types |= sys::f2s_frame_type::F2S_FRAME_COLOR.0;
         }
+        // IR is decoded with depth but nothing here uses it: not taking it
+        // lets libfreenect2 reuse its IR frame instead of allocating one
+        // for every frame set.
         if self.depth {
-            types |= sys::f2s_frame_type::F2S_FRAME_IR.0 | sys::f2s_frame_type::F2S_FRAME_DEPTH.0;
+            types |= sys::f2s_frame_type::F2S_FRAME_DEPTH.0;
         }
         types
     }
@@ -542,6 +585,9 @@ pub struct Device {
     /// until the device is freed.
     retired_listeners: Vec<Listener>,
     streaming: bool,
+    /// The cross-process lock of the serial; released after the device is
+    /// freed (fields drop after `Drop::drop`).
+    _lock: Option<DeviceLock>,
 }
 
 // SAFETY: a Freenect2Device has no thread affinity; all mutation goes through
@@ -571,6 +617,21 @@ impl Device {
 
     pub fn is_streaming(&self) -> bool {
         self.streaming
+    }
+
+    /// The serial libfreenect2's device object reports (the one it really
+    /// opened).
+    pub fn opened_serial(&self) -> Result<String, Kinect2Error> {
+        let _context = lock(&self.context);
+        let device = self.handle.as_ptr();
+        read_string(
+            "read the serial of the opened device",
+            Some(&self.serial),
+            |buffer, capacity, length| {
+                // SAFETY: `device` is open; `buffer` holds `capacity` writable bytes.
+                unsafe { sys::f2s_device_serial(device, buffer, capacity, length) }
+            },
+        )
     }
 
     pub fn firmware_version(&mut self) -> Result<String, Kinect2Error> {
@@ -673,6 +734,24 @@ impl Device {
         check(status, "stop the streams", Some(&self.serial))
     }
 
+    /// Colour and depth frames libfreenect2 has delivered since the streams
+    /// first started, taken or not: `(colour, depth)`, `(0, 0)` before.
+    pub fn frame_counts(&self) -> (u64, u64) {
+        let Some(listener) = self.listener.as_ref() else {
+            return (0, 0);
+        };
+        let (mut color, mut depth) = (0u64, 0u64);
+        // SAFETY: the listener is alive; both out-pointers are writable. The
+        // shim reads the counters under the listener's own mutex.
+        let status =
+            unsafe { sys::f2s_listener_counts(listener.handle.as_ptr(), &mut color, &mut depth) };
+        if status == sys::f2s_status::F2S_OK {
+            (color, depth)
+        } else {
+            (0, 0)
+        }
+    }
+
     /// Waits up to `timeout` for a complete frame set; `Ok(None)` on timeout.
     pub fn wait_for_frames(
         &mut self,
@@ -683,6 +762,7 @@ impl Device {
                 action: "wait for frames before starting the streams",
                 serial: Some(self.serial.clone()),
                 status: ShimStatus(sys::f2s_status::F2S_ERR_NO_FRAME.0),
+                exception: None,
                 libfreenect2_log: None,
             });
         };
@@ -723,8 +803,8 @@ impl Drop for Device {
     }
 }
 
-/// A complete set of frames (depth and IR, and colour when streaming it),
-/// held until dropped.
+/// A complete set of frames (depth, and colour when streaming it), held
+/// until dropped.
 pub struct FrameSet<'d> {
     listener: NonNull<sys::f2s_listener>,
     serial: &'d str,
@@ -749,11 +829,6 @@ impl FrameSet<'_> {
     /// The depth frame: 512 x 424 float millimetres (mirrored, distorted).
     pub fn depth(&self) -> Option<FrameView<'_>> {
         self.frame(sys::f2s_frame_type::F2S_FRAME_DEPTH)
-    }
-
-    /// The IR frame: 512 x 424 float intensities.
-    pub fn ir(&self) -> Option<FrameView<'_>> {
-        self.frame(sys::f2s_frame_type::F2S_FRAME_IR)
     }
 
     /// The colour frame: 1920 x 1080, 4 bytes per pixel (BGRX or RGBX).
@@ -939,6 +1014,21 @@ mod tests {
                 )
             };
             assert_eq!(status, sys::f2s_status::F2S_ERR_NO_FRAME);
+        }
+    }
+
+    #[test]
+    fn a_device_other_than_the_requested_one_is_an_error() {
+        check_opened_serial("011054343347", "011054343347").expect("the same device");
+        match check_opened_serial("011054343347", "003623251547") {
+            Err(err @ Kinect2Error::SerialMismatch { .. }) => {
+                let message = err.to_string();
+                assert!(
+                    message.contains("011054343347") && message.contains("003623251547"),
+                    "{message}"
+                );
+            }
+            other => panic!("expected SerialMismatch, got {other:?}"),
         }
     }
 

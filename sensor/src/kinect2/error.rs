@@ -82,11 +82,18 @@ pub enum Kinect2Error {
         available: String,
     },
     /// A libfreenect2 operation failed.
-    #[error("failed to {action} (Kinect v2 {}): {status}{}", serial.as_deref().unwrap_or("-"), log_suffix(.libfreenect2_log))]
+    #[error(
+        "failed to {action} (Kinect v2 {}): {status}{}{}",
+        serial.as_deref().unwrap_or("-"),
+        exception_suffix(.exception),
+        log_suffix(.libfreenect2_log)
+    )]
     Operation {
         action: &'static str,
         serial: Option<String>,
         status: ShimStatus,
+        /// The text of the C++ exception the shim caught, if it caught one.
+        exception: Option<String>,
         libfreenect2_log: Option<String>,
     },
     /// A frame from the device does not have the layout libfreenect2 documents.
@@ -102,12 +109,51 @@ pub enum Kinect2Error {
          before opening it again"
     )]
     AlreadyOpen { serial: String },
+    /// Another process has the device open (its lock file is held).
+    #[error(transparent)]
+    Locked(#[from] crate::device_lock::DeviceLockError),
+    /// libfreenect2 opened another device than the one asked for (after
+    /// its USB reset made the wanted one vanish, it re-opens by index).
+    #[error(
+        "asked libfreenect2 for Kinect v2 {requested} but it opened {opened} (the device vanished \
+         during its USB reset and libfreenect2 re-opened by index); closed it again"
+    )]
+    SerialMismatch { requested: String, opened: String },
+    /// The depth pipeline delivers no depth while the camera streams (colour
+    /// flows, or the decoder keeps logging errors): OpenCL/CUDA could not
+    /// initialise. Reconnecting cannot cure that.
+    #[error(
+        "Kinect v2 {serial}: the '{pipeline}' depth pipeline delivered no depth in {waited_s:.1} s \
+         while the camera streamed ({color_frames} colour frames, {pipeline_errors} depth decoder \
+         errors){}; the GPU decoder could not initialise (no OpenCL/CUDA driver, or a wrong \
+         --gpu-device?). Use --pipeline cpu (works everywhere, more CPU), or fix the GPU set-up",
+        log_suffix(.libfreenect2_log)
+    )]
+    DepthPipelineFailed {
+        serial: String,
+        pipeline: &'static str,
+        color_frames: u64,
+        pipeline_errors: u64,
+        waited_s: f64,
+        libfreenect2_log: Option<String>,
+    },
+    /// Opening on a thread of its own failed (the thread could not start or
+    /// panicked).
+    #[error("opening the Kinect v2 failed: {0}")]
+    Background(String),
     /// Camera parameters that libfreenect2's registration cannot use safely.
     #[error("invalid camera parameters: {0}")]
     InvalidParams(String),
     /// A serial number with an interior NUL byte.
     #[error("invalid serial number {0:?}")]
     InvalidSerial(String),
+}
+
+fn exception_suffix(exception: &Option<String>) -> String {
+    match exception {
+        Some(text) => format!(": {text}"),
+        None => String::new(),
+    }
 }
 
 fn log_suffix(log: &Option<String>) -> String {
@@ -136,12 +182,41 @@ pub(crate) fn check(
     if status.is_ok() {
         Ok(())
     } else {
+        let exception = if status.0 == sys::f2s_status::F2S_ERR_EXCEPTION.0 {
+            take_exception()
+        } else {
+            None
+        };
         Err(Kinect2Error::Operation {
             action,
             serial: serial.map(str::to_string),
             status,
+            exception,
             libfreenect2_log: log::take_last_problem(),
         })
+    }
+}
+
+/// The text of the last C++ exception the shim caught on this thread (and
+/// forgets it), if any.
+pub(crate) fn take_exception() -> Option<String> {
+    let mut buffer = vec![0u8; 256];
+    loop {
+        let mut length = 0usize;
+        // SAFETY: `buffer` holds `buffer.len()` writable bytes; `length` is
+        // writable. The text is thread-local in the shim.
+        let status = unsafe {
+            sys::f2s_take_exception(buffer.as_mut_ptr().cast(), buffer.len(), &mut length)
+        };
+        if status == sys::f2s_status::F2S_ERR_BUFFER_TOO_SMALL && length + 1 > buffer.len() {
+            buffer.resize(length + 1, 0);
+            continue;
+        }
+        if status != sys::f2s_status::F2S_OK {
+            return None;
+        }
+        buffer.truncate(length.min(buffer.len()));
+        return Some(String::from_utf8_lossy(&buffer).into_owned());
     }
 }
 
@@ -156,6 +231,50 @@ pub(crate) fn non_null<T>(
         action,
         serial: serial.map(str::to_string),
         status: ShimStatus(sys::f2s_status::F2S_ERR_NULL_ARGUMENT.0),
+        exception: None,
         libfreenect2_log: log::take_last_problem(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn throw(message: Option<&std::ffi::CStr>) -> Result<(), Kinect2Error> {
+        let pointer = message.map_or(std::ptr::null(), std::ffi::CStr::as_ptr);
+        // SAFETY: `pointer` is null or a NUL-terminated string that outlives
+        // the call; the shim catches what it throws.
+        let status = unsafe { sys::f2s_selftest_throw(pointer) };
+        check(status, "run the exception self-test", Some("test"))
+    }
+
+    #[test]
+    fn the_text_of_a_caught_exception_reaches_the_error_of_its_thread_only() {
+        let err = throw(Some(c"LIBUSB_ERROR_NO_MEM in the shim")).expect_err("threw");
+        match &err {
+            Kinect2Error::Operation { exception, .. } => {
+                assert_eq!(
+                    exception.as_deref(),
+                    Some("LIBUSB_ERROR_NO_MEM in the shim")
+                );
+            }
+            other => panic!("expected Operation, got {other:?}"),
+        }
+        assert!(
+            err.to_string().contains("LIBUSB_ERROR_NO_MEM in the shim"),
+            "{err}"
+        );
+        // Taken once; another thread's exception is not ours.
+        assert_eq!(take_exception(), None);
+        std::thread::spawn(|| {
+            // SAFETY: as above.
+            let status = unsafe { sys::f2s_selftest_throw(c"elsewhere".as_ptr()) };
+            assert_eq!(status, sys::f2s_status::F2S_ERR_EXCEPTION);
+        })
+        .join()
+        .expect("thread");
+        assert_eq!(take_exception(), None);
+        let err = throw(None).expect_err("threw an int");
+        assert!(err.to_string().contains("unknown type"), "{err}");
+    }
 }

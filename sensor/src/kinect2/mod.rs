@@ -11,8 +11,8 @@
 //! | `device.rs` | [`Context`] (enumerate, open), [`Device`] (config, parameters, start/stop), [`FrameSet`] and [`FrameView`] |
 //! | `registration.rs` | [`Registration`]: undistorted depth and registered colour |
 //! | `convert.rs` | pure: mirroring, pixel centres, mm rounding, colour byte order |
-//! | `source.rs` | [`Kinect2Source`]: the device as a [`crate::source::FrameSource`], with reconnection |
-//! | `log.rs` | libfreenect2's log into `tracing` |
+//! | `source.rs` | [`Kinect2Source`]: the device as a [`crate::source::FrameSource`], with reconnection, open/start interruptible by a stop request, a failed depth pipeline detected |
+//! | `log.rs` | libfreenect2's log into `tracing`; the last problem per thread, depth decoder errors counted |
 //! | `error.rs` | [`Kinect2Error`] |
 //!
 //! Clouds from the Kinect are unmirrored (libfreenect2 delivers mirror
@@ -33,11 +33,11 @@ pub use convert::{
     DEPTH_UNIT_M,
 };
 pub use device::{
-    library_version, ColorParams, Context, DepthConfig, Device, DeviceSelector, FrameFormat,
-    FrameSet, FrameView, IrParams, Pipeline, Streams, UnknownPipeline, COLOR_HEIGHT, COLOR_WIDTH,
-    DEPTH_HEIGHT, DEPTH_WIDTH,
+    check_opened_serial, library_version, ColorParams, Context, DepthConfig, Device,
+    DeviceSelector, FrameFormat, FrameSet, FrameView, IrParams, Pipeline, Streams, UnknownPipeline,
+    COLOR_HEIGHT, COLOR_WIDTH, DEPTH_HEIGHT, DEPTH_WIDTH, LOCK_KIND,
 };
 pub use error::{Kinect2Error, ShimStatus};
-pub use log::LOG_TARGET;
+pub use log::{depth_pipeline_errors, LOG_TARGET};
 pub use registration::{validate_params, Registration, DEPTH_PIXELS};
 pub use source::{CaptureStats, Kinect2Options, Kinect2Source};

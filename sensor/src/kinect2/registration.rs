@@ -13,17 +13,21 @@ use super::sys;
 pub const DEPTH_PIXELS: usize = DEPTH_WIDTH * DEPTH_HEIGHT;
 
 /// Owns a libfreenect2::Registration (about 3.5 MB of lookup tables built
-/// from the camera parameters).
+/// from the camera parameters) and the buffers its `apply` works in (the
+/// shim's 8.3 MB filter map and 0.87 MB colour offsets, and our copy of
+/// depth that needs sanitising), so that nothing is allocated per frame.
 pub struct Registration {
     handle: NonNull<sys::f2s_registration>,
     ir: IrParams,
+    /// Depth with values libfreenect2 cannot handle replaced (rarely used).
+    sanitized: Vec<u8>,
 }
 
-// SAFETY: a Registration is immutable after construction (apply and
-// undistortDepth are const and keep no state between calls).
+// SAFETY: the registration has no thread affinity; `apply` writes the shim's
+// buffers and takes `&mut self`, `undistort` only reads (libfreenect2's
+// undistortDepth is const), so moving it to another thread is sound. It is
+// deliberately not Sync.
 unsafe impl Send for Registration {}
-// SAFETY: as above: only const methods, no interior mutability.
-unsafe impl Sync for Registration {}
 
 impl std::fmt::Debug for Registration {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -178,7 +182,11 @@ impl Registration {
         let status = unsafe { sys::f2s_registration_new(&raw_ir, color.raw(), &mut raw) };
         check(status, action, None)?;
         let handle = non_null(raw, action, None)?;
-        Ok(Self { handle, ir: *ir })
+        Ok(Self {
+            handle,
+            ir: *ir,
+            sanitized: Vec::new(),
+        })
     }
 
     /// The IR parameters the registration was built with.
@@ -212,9 +220,10 @@ impl Registration {
     /// Undistorts `depth` and maps `color` (1920 x 1080 x 4) onto it:
     /// `registered[i]` holds the 4 colour bytes (in `color`'s byte order) of
     /// undistorted depth pixel `i`, 0 where there is none. With `filter`,
-    /// colour pixels hidden behind nearer depth are dropped.
+    /// colour pixels hidden behind nearer depth are dropped. Reuses the
+    /// registration's buffers: nothing is allocated per call.
     pub fn apply(
-        &self,
+        &mut self,
         color: &FrameView<'_>,
         depth: &FrameView<'_>,
         undistorted: &mut [f32],
@@ -225,8 +234,7 @@ impl Registration {
         check_view(depth, DEPTH_WIDTH, DEPTH_HEIGHT, "depth")?;
         check_len(undistorted.len(), "undistorted depth")?;
         check_len(registered.len(), "registered colour")?;
-        let mut scratch = Vec::new();
-        let depth = sanitized_depth(depth, &mut scratch)?;
+        let depth = sanitized_depth(depth, &mut self.sanitized)?;
         let mut undistorted_image = sys::f2s_image {
             width: DEPTH_WIDTH,
             height: DEPTH_HEIGHT,
@@ -239,9 +247,10 @@ impl Registration {
             bytes_per_pixel: 4,
             data: registered.as_mut_ptr().cast(),
         };
-        // SAFETY: the registration is alive; the views point to readable
-        // frames of the checked sizes; both outputs are distinct, writable
-        // 512*424 four-byte buffers (checked above).
+        // SAFETY: the registration is alive and borrowed mutably (the shim
+        // writes its buffers); the views point to readable frames of the
+        // checked sizes; both outputs are distinct, writable 512*424
+        // four-byte buffers (checked above).
         let status = unsafe {
             sys::f2s_registration_apply(
                 self.handle.as_ptr(),

@@ -7,7 +7,14 @@
 //! frames stop coming (a pulled cable, a USB reset), dropping the device and
 //! reopening the same serial with exponential backoff, without ending the
 //! stream. Every wait honours the [`StopFlag`], so SIGINT/SIGTERM stop it
-//! within one wait slice.
+//! within one wait slice (200 ms): opening and starting a device, which
+//! block inside libfreenect2 for seconds, run on a thread of their own
+//! ([`run_interruptible`]).
+//!
+//! A depth pipeline that cannot work (OpenCL/CUDA that failed to initialise:
+//! colour flows, depth never comes) is an error naming the pipeline and the
+//! `cpu` fallback ([`Kinect2Error::DepthPipelineFailed`]), not a reason to
+//! reconnect: see [`MissingDepthDetector`].
 
 use std::time::{Duration, Instant};
 
@@ -19,7 +26,10 @@ use super::device::{
     Streams, COLOR_HEIGHT, COLOR_WIDTH, DEPTH_HEIGHT, DEPTH_WIDTH,
 };
 use super::error::Kinect2Error;
+use super::log::depth_pipeline_errors;
 use super::registration::{Registration, DEPTH_PIXELS};
+use crate::interruptible::run_interruptible;
+use crate::missing_depth::MissingDepthDetector;
 use crate::publish::StopFlag;
 use crate::recording::ColorImage;
 use crate::source::{FrameSource, SourceError, SourceFrame, SourceInfo};
@@ -85,7 +95,12 @@ pub struct CaptureStats {
 }
 
 /// Slice of every blocking wait, so that a stop request is seen quickly.
-const WAIT_SLICE: Duration = Duration::from_millis(200);
+pub const WAIT_SLICE: Duration = Duration::from_millis(200);
+
+/// Called about every [`WAIT_SLICE`] while the source waits (for a device,
+/// for frames, before a reconnect) and after every frame, with the counters
+/// so far: where a daemon pings its watchdog.
+pub type WaitHook = Box<dyn FnMut(&CaptureStats)>;
 /// How often the counters are logged while streaming.
 const REPORT_EVERY: Duration = Duration::from_secs(60);
 
@@ -117,6 +132,8 @@ pub struct Kinect2Source {
     last_report: Instant,
     undistorted: Vec<f32>,
     registered: Vec<u32>,
+    missing_depth: MissingDepthDetector,
+    on_wait: WaitHook,
 }
 
 impl std::fmt::Debug for Kinect2Source {
@@ -134,19 +151,37 @@ impl Kinect2Source {
     /// backoff) until one appears; `Ok(None)` when `stop` was set first.
     /// Without it, fails at once when no Kinect v2 is connected.
     pub fn open(options: Kinect2Options, stop: StopFlag) -> Result<Option<Self>, Kinect2Error> {
+        Self::open_watched(options, stop, Box::new(|_| {}))
+    }
+
+    /// [`Kinect2Source::open`], calling `on_wait` about every 200 ms while
+    /// it waits (and later while streaming, see [`WaitHook`]).
+    pub fn open_watched(
+        options: Kinect2Options,
+        stop: StopFlag,
+        mut on_wait: WaitHook,
+    ) -> Result<Option<Self>, Kinect2Error> {
         let context = Context::new()?;
         let mut backoff = options.min_backoff;
-        let mut failed_opens = 0;
+        let mut stats = CaptureStats::default();
         let running = loop {
-            if stop.is_stopped() {
+            let Some(started) = start_interruptible(
+                &context,
+                &options,
+                &options.device,
+                &stop,
+                &mut on_wait,
+                &stats,
+            )?
+            else {
                 return Ok(None);
-            }
-            match start_device(&context, &options, &options.device) {
+            };
+            match started {
                 Ok(running) => break running,
                 Err(err) if options.wait_for_device && is_retryable(&err) => {
-                    failed_opens += 1;
+                    stats.failed_opens += 1;
                     tracing::warn!(error = %err, retry_in = ?backoff, "waiting for a Kinect v2");
-                    if !stop.sleep(backoff) {
+                    if !sleep_watched(&stop, backoff, &mut on_wait, &stats) {
                         return Ok(None);
                     }
                     backoff = (backoff * 2).min(options.max_backoff);
@@ -175,6 +210,7 @@ impl Kinect2Source {
             color = options.color,
             "Kinect v2 streaming"
         );
+        let missing_depth = MissingDepthDetector::new(options.frame_timeout.mul_f64(2.0 / 3.0));
         Ok(Some(Self {
             backoff: options.min_backoff,
             options,
@@ -184,10 +220,7 @@ impl Kinect2Source {
             ir,
             info,
             stop,
-            stats: CaptureStats {
-                failed_opens,
-                ..CaptureStats::default()
-            },
+            stats,
             next_index: 0,
             clock: DeviceClock::default(),
             last_frame_at: None,
@@ -195,6 +228,8 @@ impl Kinect2Source {
             last_report: Instant::now(),
             undistorted: vec![0.0; DEPTH_PIXELS],
             registered: vec![0; DEPTH_PIXELS],
+            missing_depth,
+            on_wait,
         }))
     }
 
@@ -231,11 +266,22 @@ impl Kinect2Source {
     /// first. Returns false if stopped; fails on errors that retrying
     /// cannot cure (see [`is_retryable`]).
     fn reconnect(&mut self) -> Result<bool, Kinect2Error> {
-        if !self.stop.sleep(self.backoff) {
+        if !sleep_watched(&self.stop, self.backoff, &mut self.on_wait, &self.stats) {
             return Ok(false);
         }
         let selector = DeviceSelector::Serial(self.serial.clone());
-        match start_device(&self.context, &self.options, &selector) {
+        let Some(started) = start_interruptible(
+            &self.context,
+            &self.options,
+            &selector,
+            &self.stop,
+            &mut self.on_wait,
+            &self.stats,
+        )?
+        else {
+            return Ok(false);
+        };
+        match started {
             Ok(running) => {
                 let ir = *running.registration.ir_params();
                 if ir != self.ir {
@@ -245,6 +291,7 @@ impl Kinect2Source {
                     );
                 }
                 self.running = Some(running);
+                self.missing_depth.restart();
                 self.reopened = true;
                 self.stats.reconnects += 1;
                 self.backoff = self.options.min_backoff;
@@ -369,6 +416,81 @@ impl Kinect2Source {
     }
 }
 
+impl Kinect2Source {
+    /// Feeds the missing-depth detector after a wait without a frame set;
+    /// fails when the depth pipeline has not delivered for its window while
+    /// colour flowed or the decoder kept logging errors. Only for the GPU
+    /// (and default) pipelines: the CPU decoder cannot fail to initialise,
+    /// and depth missing there is a USB problem that reconnecting may cure.
+    fn check_depth_flows(&mut self) -> Result<(), Kinect2Error> {
+        if self.options.pipeline == Pipeline::Cpu {
+            return Ok(());
+        }
+        let Some(running) = self.running.as_ref() else {
+            return Ok(());
+        };
+        let (color, depth) = running.device.frame_counts();
+        let (errors, last_error) = depth_pipeline_errors();
+        match self
+            .missing_depth
+            .observe(Instant::now(), color, depth, errors)
+        {
+            None => Ok(()),
+            Some(missing) => Err(Kinect2Error::DepthPipelineFailed {
+                serial: self.serial.clone(),
+                pipeline: self.options.pipeline.name(),
+                color_frames: missing.color_frames,
+                pipeline_errors: missing.pipeline_errors,
+                waited_s: missing.waited.as_secs_f64(),
+                libfreenect2_log: last_error,
+            }),
+        }
+    }
+}
+
+/// Sleeps `duration` in slices of [`WAIT_SLICE`], calling `on_wait` after
+/// each; false when `stop` was set first.
+fn sleep_watched(
+    stop: &StopFlag,
+    duration: Duration,
+    on_wait: &mut WaitHook,
+    stats: &CaptureStats,
+) -> bool {
+    let deadline = Instant::now() + duration;
+    loop {
+        let left = deadline.saturating_duration_since(Instant::now());
+        if !stop.sleep(left.min(WAIT_SLICE)) {
+            return false;
+        }
+        if left <= WAIT_SLICE {
+            return true;
+        }
+        on_wait(stats);
+    }
+}
+
+/// Opens and starts a device on a thread of its own ([`start_device`]
+/// blocks in libfreenect2 for seconds), waiting in slices: `Ok(None)` as
+/// soon as `stop` is set, whatever libfreenect2 is doing.
+fn start_interruptible(
+    context: &Context,
+    options: &Kinect2Options,
+    selector: &DeviceSelector,
+    stop: &StopFlag,
+    on_wait: &mut WaitHook,
+    stats: &CaptureStats,
+) -> Result<Option<Result<Running, Kinect2Error>>, Kinect2Error> {
+    let (context, options, selector) = (context.clone(), options.clone(), selector.clone());
+    run_interruptible(
+        "kinect2-open",
+        stop,
+        WAIT_SLICE,
+        &mut || on_wait(stats),
+        move || start_device(&context, &options, &selector),
+    )
+    .map_err(|err| Kinect2Error::Background(err.to_string()))
+}
+
 /// Fails unless `view` is `width x height` 4-byte pixels in a format `ok`
 /// accepts.
 fn check_layout(
@@ -450,6 +572,7 @@ impl FrameSource for Kinect2Source {
 
     fn next_frame(&mut self, frame: &mut SourceFrame) -> Result<bool, SourceError> {
         loop {
+            (self.on_wait)(&self.stats);
             if self.stop.is_stopped() {
                 return Ok(false);
             }
@@ -478,6 +601,7 @@ impl FrameSource for Kinect2Source {
                 }
                 Ok(Some(false)) => continue,
                 Ok(None) => {
+                    self.check_depth_flows()?;
                     let silent = self
                         .running
                         .as_ref()
@@ -515,7 +639,9 @@ impl Drop for Kinect2Source {
     }
 }
 
-/// Errors worth retrying while waiting for a device.
+/// Errors worth retrying while waiting for a device (and when reopening
+/// it): it may appear, come back after its reset, or be let go by the
+/// process that holds it.
 fn is_retryable(err: &Kinect2Error) -> bool {
     matches!(
         err,
@@ -523,6 +649,8 @@ fn is_retryable(err: &Kinect2Error) -> bool {
             | Kinect2Error::SerialNotFound { .. }
             | Kinect2Error::IndexOutOfRange { .. }
             | Kinect2Error::Operation { .. }
+            | Kinect2Error::Locked(_)
+            | Kinect2Error::SerialMismatch { .. }
     )
 }
 
@@ -597,6 +725,10 @@ mod tests {
         assert!(!is_retryable(&Kinect2Error::InvalidParams("x".into())));
         assert!(!is_retryable(&Kinect2Error::AlreadyOpen {
             serial: "1".into()
+        }));
+        assert!(is_retryable(&Kinect2Error::SerialMismatch {
+            requested: "1".into(),
+            opened: "2".into(),
         }));
     }
 }

@@ -9,13 +9,16 @@ use anyhow::Context;
 use clap::Parser;
 use serde::Deserialize;
 use slope_ipc_types::{Mount, DEFAULT_MAX_CLOUD_POINTS};
+use slope_sensor::device_lock::DeviceLock;
 use slope_sensor::ipc::{create_node, CloudPublisher};
 use slope_sensor::kinect2::{
     library_version, CaptureStats, Context as Freenect2, DepthConfig, DeviceSelector,
-    Kinect2Options, Kinect2Source, Pipeline,
+    Kinect2Options, Kinect2Source, Pipeline, LOCK_KIND,
 };
-use slope_sensor::publish::{publish_stream, Pacing, PublishOptions, PublishStats, StopFlag};
+use slope_sensor::publish::{Pacing, PublishOptions, PublishStats, StopFlag};
 use slope_sensor::source::FrameSource;
+
+use crate::capture_notify::{publish_notifying, CaptureNotifier, SharedNotifier, SourceCounters};
 
 use crate::cli::{node_name, CommonArgs};
 use crate::mount_args::{check_mount, MountArgs};
@@ -55,7 +58,9 @@ Config file (every key optional; command-line flags win):
   roll_deg = 0.0"
 )]
 pub struct CaptureArgs {
-    /// Print the serials of the connected Kinect v2 devices and exit.
+    /// Print the connected Kinect v2 devices on stdout, one per line
+    /// (`<serial> firmware <version>`), or "no Kinect v2 found", and exit.
+    /// A device another process streams is not opened (that would reset it).
     #[arg(long)]
     pub list: bool,
 
@@ -257,14 +262,25 @@ pub struct CaptureOutcome {
     pub stopped_waiting: bool,
 }
 
-/// Prints the connected devices' serials, one per line, on stdout.
+/// Prints the connected devices on stdout, one per line: `<serial> firmware
+/// <version>`, or "no Kinect v2 found". Reading the firmware version means
+/// opening the device, which resets it: a device whose lock another process
+/// holds is listed without opening it (`firmware unknown (in use by PID
+/// n)`).
 pub fn list_devices() -> anyhow::Result<Vec<String>> {
     let context = Freenect2::new().context("cannot start libfreenect2")?;
     let serials = context
         .enumerate()
         .context("cannot enumerate Kinect v2 devices")?;
+    if serials.is_empty() {
+        println!("no Kinect v2 found");
+    }
+    let lock_dir = DeviceLock::dir();
     for serial in &serials {
-        println!("{serial}");
+        println!(
+            "{serial} firmware {}",
+            firmware_of(&context, &lock_dir, serial)
+        );
     }
     tracing::info!(
         count = serials.len(),
@@ -274,11 +290,86 @@ pub fn list_devices() -> anyhow::Result<Vec<String>> {
     Ok(serials)
 }
 
+/// The firmware version of `serial`, or why it is unknown.
+fn firmware_of(context: &Freenect2, lock_dir: &Path, serial: &str) -> String {
+    if let Some(pid) = DeviceLock::holder_in(lock_dir, LOCK_KIND, serial) {
+        let pid = pid.map_or_else(|| "unknown".to_string(), |pid| pid.to_string());
+        return format!("unknown (in use by PID {pid})");
+    }
+    let selector = DeviceSelector::Serial(serial.to_string());
+    match context
+        .open(&selector, Pipeline::Cpu, None)
+        .and_then(|mut device| device.firmware_version())
+    {
+        Ok(firmware) => firmware,
+        Err(err) => {
+            tracing::warn!(serial, error = %err, "cannot read the firmware version");
+            format!("unknown ({err})")
+        }
+    }
+}
+
+/// Exit status for failures that restarting cannot cure (a depth pipeline
+/// that is not built in or cannot initialise): `EX_CONFIG` (78), so that a
+/// unit with `RestartPreventExitStatus=78` stays failed instead of
+/// restarting every few seconds.
+pub const EXIT_CONFIG: u8 = 78;
+
+/// [`EXIT_CONFIG`] when `err` is a failure that restarting cannot cure.
+pub fn config_exit_code(err: &anyhow::Error) -> Option<u8> {
+    use slope_sensor::kinect2::Kinect2Error;
+    use slope_sensor::publish::PublishError;
+    use slope_sensor::source::SourceError;
+    let lasting = |err: &Kinect2Error| {
+        matches!(
+            err,
+            Kinect2Error::DepthPipelineFailed { .. } | Kinect2Error::PipelineUnavailable { .. }
+        )
+    };
+    err.chain()
+        .any(|cause| {
+            cause.downcast_ref::<Kinect2Error>().is_some_and(lasting)
+                || matches!(
+                    cause.downcast_ref::<PublishError>(),
+                    Some(PublishError::Source(SourceError::Kinect2(inner))) if lasting(inner)
+                )
+        })
+        .then_some(EXIT_CONFIG)
+}
+
+/// The counters of the status line.
+fn counters(stats: &CaptureStats) -> SourceCounters {
+    SourceCounters {
+        dropped: stats.bad_status + stats.malformed,
+        lost: stats.lost,
+        reconnects: stats.reconnects,
+        failed_opens: stats.failed_opens,
+    }
+}
+
+/// Runs the capture as a systemd notify daemon (see `capture_notify`):
+/// `READY=1` after the first published cloud, the watchdog from every wait,
+/// a status line a second, `STATUS=failed: ...` and `STOPPING=1` on the way
+/// out. Outside systemd the notifications go nowhere.
 pub fn run(args: &CaptureArgs, stop: &StopFlag) -> anyhow::Result<CaptureOutcome> {
     if args.list {
         list_devices()?;
         return Ok(CaptureOutcome::default());
     }
+    let notifier = CaptureNotifier::from_env();
+    let result = capture(args, stop, &notifier);
+    if let Err(err) = &result {
+        notifier.borrow_mut().failed(&format!("{err:#}"));
+    }
+    notifier.borrow().stopping();
+    result
+}
+
+fn capture(
+    args: &CaptureArgs,
+    stop: &StopFlag,
+    notifier: &SharedNotifier,
+) -> anyhow::Result<CaptureOutcome> {
     let config = match &args.config {
         Some(path) => CaptureConfig::load(path)?,
         None => CaptureConfig::default(),
@@ -292,8 +383,12 @@ pub fn run(args: &CaptureArgs, stop: &StopFlag) -> anyhow::Result<CaptureOutcome
         libfreenect2 = library_version(),
         "opening the Kinect v2"
     );
-    let Some(mut source) =
-        Kinect2Source::open(options, stop.clone()).context("cannot start the Kinect v2")?
+    let hook_notifier = SharedNotifier::clone(notifier);
+    let on_wait = Box::new(move |stats: &CaptureStats| {
+        hook_notifier.borrow_mut().on_wait(counters(stats));
+    });
+    let Some(mut source) = Kinect2Source::open_watched(options, stop.clone(), on_wait)
+        .context("cannot start the Kinect v2")?
     else {
         tracing::info!("stopped before a Kinect v2 appeared");
         return Ok(CaptureOutcome {
@@ -315,7 +410,7 @@ pub fn run(args: &CaptureArgs, stop: &StopFlag) -> anyhow::Result<CaptureOutcome
         max_frames: args.max_frames,
         ..PublishOptions::default()
     };
-    let result = publish_stream(&mut source, &publisher, &options, stop);
+    let result = publish_notifying(&mut source, &publisher, &options, stop, notifier);
     // Stop the streams (then free the listener) before reporting.
     source.close();
     let capture = source.stats();
@@ -384,6 +479,31 @@ mod tests {
         assert_eq!(overridden.pipeline, Pipeline::OpenCl);
         assert_eq!(overridden.depth.max_depth_m, 4.0);
         assert_eq!(overridden.mount.pitch_deg, -20.0);
+    }
+
+    #[test]
+    fn a_broken_depth_pipeline_exits_with_ex_config() {
+        use slope_sensor::kinect2::Kinect2Error;
+        use slope_sensor::publish::PublishError;
+        use slope_sensor::source::SourceError;
+        let failed = || Kinect2Error::DepthPipelineFailed {
+            serial: "1".into(),
+            pipeline: "cl",
+            color_frames: 60,
+            pipeline_errors: 60,
+            waited_s: 2.0,
+            libfreenect2_log: None,
+        };
+        let while_streaming = anyhow::Error::new(PublishError::Source(SourceError::from(failed())))
+            .context("capture from Kinect v2 1 failed");
+        assert_eq!(config_exit_code(&while_streaming), Some(EXIT_CONFIG));
+        let at_open = anyhow::Error::new(failed()).context("cannot start the Kinect v2");
+        assert_eq!(config_exit_code(&at_open), Some(EXIT_CONFIG));
+        let lost = anyhow::Error::new(Kinect2Error::NoDevice {
+            version: "0.2.0".into(),
+            libfreenect2_log: None,
+        });
+        assert_eq!(config_exit_code(&lost), None);
     }
 
     #[test]

@@ -4,6 +4,7 @@
 
 #[cfg(feature = "kinect2")]
 pub mod capture;
+pub mod capture_notify;
 pub mod cli;
 pub mod convert;
 pub mod demo;

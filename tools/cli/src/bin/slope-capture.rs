@@ -3,11 +3,15 @@
 use std::process::ExitCode;
 
 use clap::Parser;
-use slope_tools::capture::{run, CaptureArgs};
+use slope_tools::capture::{config_exit_code, run, CaptureArgs};
 use slope_tools::cli::{exit_status, stop_on_signals};
 
 fn main() -> ExitCode {
     let args = CaptureArgs::parse();
     args.common.init_logging();
-    exit_status(stop_on_signals().and_then(|stop| run(&args, &stop).map(drop)))
+    let result = stop_on_signals().and_then(|stop| run(&args, &stop).map(drop));
+    // Failures that a restart cannot cure exit with EX_CONFIG (78).
+    let config = result.as_ref().err().and_then(config_exit_code);
+    let status = exit_status(result);
+    config.map_or(status, ExitCode::from)
 }
