@@ -2,7 +2,7 @@
 //! prefix from iceoryx2 (this host) to Zenoh (any host), as versioned JSON.
 //!
 //! [`payload`] is the wire format (always built, so that subscribers in
-//! Rust can decode it without Zenoh); [`bridge`] is the forwarding loop,
+//! Rust can decode it without Zenoh); `bridge` is the forwarding loop,
 //! behind the `zenoh` feature.
 
 pub mod payload;

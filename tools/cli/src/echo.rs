@@ -46,7 +46,7 @@ pub struct EchoArgs {
     #[arg(long)]
     pub json: bool,
 
-    /// Print the daemons' health reports (<prefix>/health) instead of
+    /// Print the daemons' health reports (topic PREFIX/health) instead of
     /// estimates; --count and --timeout then count reports.
     #[arg(long)]
     pub health: bool,

@@ -62,7 +62,7 @@ pub struct EstimatorArgs {
     #[arg(long)]
     pub print_config: bool,
 
-    /// Seconds between health reports on <prefix>/health (0: none, the
+    /// Seconds between health reports on the topic PREFIX/health (0: none, the
     /// summary is still logged every 10 s).
     #[arg(long, default_value_t = DEFAULT_HEALTH_INTERVAL_S, value_parser = health_interval_arg)]
     pub health_interval: f64,
