@@ -8,9 +8,9 @@ use std::time::Duration;
 use anyhow::Context;
 use clap::Parser;
 use serde::Deserialize;
-use slope_ipc_types::{Mount, DEFAULT_MAX_CLOUD_POINTS};
+use slope_ipc_types::{HealthComponent, Mount, DEFAULT_MAX_CLOUD_POINTS};
 use slope_sensor::device_lock::DeviceLock;
-use slope_sensor::ipc::{create_node, CloudPublisher};
+use slope_sensor::ipc::{create_node, CloudPublisher, HealthPublisher};
 use slope_sensor::kinect2::{
     library_version, CaptureStats, Context as Freenect2, DepthConfig, DeviceSelector,
     Kinect2Options, Kinect2Source, Pipeline, LOCK_KIND,
@@ -21,6 +21,7 @@ use slope_sensor::source::FrameSource;
 use crate::capture_notify::{publish_notifying, CaptureNotifier, SharedNotifier, SourceCounters};
 
 use crate::cli::{node_name, CommonArgs};
+use crate::health::{HealthReporter, DEFAULT_HEALTH_INTERVAL_S};
 use crate::mount_args::{check_mount, MountArgs};
 use crate::replay::positive_f64;
 
@@ -400,6 +401,12 @@ fn capture(
     let node = create_node(&node_name("slope-capture"))?;
     let publisher = CloudPublisher::create(&node, &names, source.info(), args.max_points)
         .context("cannot publish clouds")?;
+    let health = HealthPublisher::create(&node, &names).context("cannot publish health reports")?;
+    notifier.borrow_mut().attach_health(HealthReporter::new(
+        HealthComponent::Capture,
+        Some(health),
+        DEFAULT_HEALTH_INTERVAL_S,
+    ));
     tracing::info!(
         serial = source.serial(),
         service = publisher.service_name(),

@@ -11,6 +11,10 @@
 //!   `streaming: 30.0 fps, 1234 frames, 0 dropped, 0 reconnects`;
 //! - `STATUS=failed: <reason>` before a failed exit, `STOPPING=1` on the
 //!   way out.
+//!
+//! With [`CaptureNotifier::attach_health`] the same counters also go out as
+//! health reports on `<prefix>/health` (component `capture`: frames in,
+//! out, dropped, reconnects, rates) and into the log every 10 s.
 
 use std::cell::RefCell;
 use std::rc::Rc;
@@ -22,6 +26,7 @@ use slope_sensor::publish::{
 };
 use slope_sensor::source::FrameSource;
 
+use crate::health::HealthReporter;
 use crate::service_manager::ServiceManager;
 
 /// The source's counters, as far as the status line needs them.
@@ -45,6 +50,9 @@ pub struct CaptureNotifier {
     published: u64,
     /// Published count and time of the last status line (for its fps).
     last_status: Option<(u64, Instant)>,
+    /// Health reports, once attached, and what they have counted so far.
+    health: Option<HealthReporter>,
+    counted: (SourceCounters, u64),
 }
 
 /// Shared between the source's wait hook and the frame loop.
@@ -59,7 +67,14 @@ impl CaptureNotifier {
             source: SourceCounters::default(),
             published: 0,
             last_status: None,
+            health: None,
+            counted: (SourceCounters::default(), 0),
         }))
+    }
+
+    /// Reports the capture's health from now on (`HealthComponent::Capture`).
+    pub fn attach_health(&mut self, reporter: HealthReporter) {
+        self.health = Some(reporter);
     }
 
     /// From every wait of the source (about every 200 ms) and every frame.
@@ -83,18 +98,44 @@ impl CaptureNotifier {
     pub fn failed(&mut self, reason: &str) {
         let line = format!("failed: {}", reason.replace('\n', " "));
         self.manager.status(&line);
+        if let Some(health) = &mut self.health {
+            health.monitor.error(reason);
+        }
     }
 
     pub fn stopping(&self) {
         self.manager.stopping();
     }
 
+    /// Brings the health counters up to the source's and the loop's.
+    fn count_health(&mut self) {
+        let Some(health) = &mut self.health else {
+            return;
+        };
+        let (before, published_before) = self.counted;
+        let m = &mut health.monitor;
+        let published = self.published.saturating_sub(published_before);
+        let dropped = self.source.dropped.saturating_sub(before.dropped);
+        m.frames_in(published + dropped);
+        m.dropped(dropped);
+        for _ in 0..published {
+            m.frame_out(None, &[]);
+        }
+        for _ in 0..self.source.reconnects.saturating_sub(before.reconnects) {
+            m.reconnected();
+        }
+        self.counted = (self.source, self.published);
+        health.tick();
+    }
+
     fn tick(&mut self) {
+        self.count_health();
         let Self {
             manager,
             source,
             published,
             last_status,
+            ..
         } = self;
         let streaming = manager.is_ready();
         manager.tick(|| {

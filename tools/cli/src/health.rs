@@ -176,6 +176,16 @@ pub struct HealthReporter {
     last: Instant,
 }
 
+impl std::fmt::Debug for HealthReporter {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("HealthReporter")
+            .field("monitor", &self.monitor)
+            .field("publishing", &self.publisher.is_some())
+            .field("interval", &self.interval)
+            .finish()
+    }
+}
+
 impl HealthReporter {
     /// `publisher` `None` (or `interval_s` 0): reports are only logged.
     pub fn new(

@@ -10,14 +10,15 @@
 use std::os::unix::net::UnixDatagram;
 use std::time::{Duration, Instant};
 
-use slope_ipc_types::{CloudSource, Intrinsics, Mount, ServiceNames};
-use slope_sensor::ipc::{create_node, CloudPublisher};
+use slope_ipc_types::{CloudSource, HealthComponent, Intrinsics, Mount, ServiceNames};
+use slope_sensor::ipc::{create_node, CloudPublisher, HealthPublisher, HealthSubscriber};
 use slope_sensor::publish::{Pacing, PublishOptions, StopFlag};
 use slope_sensor::recording::DepthImage;
 use slope_sensor::source::{FrameSource, SourceError, SourceFrame, SourceInfo};
 use slope_tools::capture_notify::{
     publish_notifying, CaptureNotifier, SharedNotifier, SourceCounters,
 };
+use slope_tools::health::HealthReporter;
 
 /// Waits `waits` slices "for a device", then gives `frames` frames, one
 /// every `period`, calling the wait hook as `Kinect2Source` does (every
@@ -123,6 +124,13 @@ fn the_capture_is_ready_after_its_first_cloud_and_reports_while_waiting_and_stre
     let names = ServiceNames::new(format!("slope-test-capture-notify-{}", std::process::id()));
     let node = create_node("slope-test-capture-notify").expect("node");
     let publisher = CloudPublisher::create(&node, &names, &info, 8).expect("publisher");
+    let health = HealthSubscriber::create(&node, &names).expect("health subscriber");
+    let reporter = HealthReporter::new(
+        HealthComponent::Capture,
+        Some(HealthPublisher::create(&node, &names).expect("health publisher")),
+        0.2,
+    );
+    notifier.borrow_mut().attach_health(reporter);
     let options = PublishOptions {
         pacing: Pacing::Source,
         ..PublishOptions::default()
@@ -137,6 +145,21 @@ fn the_capture_is_ready_after_its_first_cloud_and_reports_while_waiting_and_stre
     .expect("streams");
     notifier.borrow().stopping();
     assert_eq!(stats.published, 40);
+    // Health reports every 0.2 s while streaming (about 1.2 s): the last
+    // one counts the clouds published by then, at about the camera's rate.
+    let mut reports = Vec::new();
+    while let Some(report) = health.receive().expect("receive") {
+        reports.push(report);
+    }
+    assert!(reports.len() >= 3, "{} reports", reports.len());
+    assert!(reports
+        .iter()
+        .all(|r| r.component() == Some(HealthComponent::Capture)));
+    let last = reports.last().expect("a report");
+    assert!(last.frames_out >= 30 && last.frames_out <= 40, "{last:?}");
+    assert_eq!(last.frames_in, last.frames_out, "{last:?}");
+    let busiest = reports.iter().map(|r| r.rate_out_hz).fold(0.0, f64::max);
+    assert!(busiest > 10.0 && busiest < 40.0, "{busiest}");
 
     let seen = reader.join().expect("reader");
     let ready = seen
