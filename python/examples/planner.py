@@ -33,7 +33,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--prefix", default="slope", help="service prefix (default: slope)")
     parser.add_argument("--count", type=int, help="stop after this many estimates")
-    parser.add_argument("--timeout", type=float, help="stop after this many seconds without one")
+    parser.add_argument("--timeout-s", type=float, help="stop after this many seconds without one")
     parser.add_argument("--json", action="store_true", help="one JSON object per estimate")
     parser.add_argument("--max-slope", type=float, default=20.0, help="degrees (default 20)")
     parser.add_argument("--min-confidence", type=float, default=0.5)
@@ -41,7 +41,7 @@ def main() -> int:
 
     seen = 0
     try:
-        estimates = slope_client.subscribe(args.prefix, timeout_s=args.timeout)
+        estimates = slope_client.subscribe(args.prefix, timeout_s=args.timeout_s)
         print(f"subscribed to {estimates.name}", file=sys.stderr, flush=True)
         for estimate in estimates:
             speed = speed_for(estimate, args.max_slope, args.min_confidence)

@@ -29,7 +29,7 @@ fn start_echo(prefix: &str, count: usize) -> Proc {
             prefix,
             "--count",
             &count,
-            "--timeout",
+            "--timeout-s",
             "120",
         ],
     )
@@ -161,7 +161,7 @@ fn every_frame_gives_one_estimate_in_order_within_a_degree() {
             "5",
             "--wait-subscribers",
             "1",
-            "--wait-timeout",
+            "--wait-timeout-s",
             "20",
         ],
     );

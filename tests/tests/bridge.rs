@@ -36,7 +36,7 @@ fn every_estimate_crosses_the_bridge_as_versioned_json() {
     let endpoint = format!("tcp/127.0.0.1:{}", free_port());
     let _estimator = Proc::spawn(
         "slope-estimator",
-        ["--service-prefix", &prefix, "--health-interval", "0.2"],
+        ["--service-prefix", &prefix, "--health-interval-s", "0.2"],
     )
     .assert_ready("estimator ready");
     let mut bridge = Proc::spawn(

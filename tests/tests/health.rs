@@ -17,7 +17,7 @@ fn the_estimator_reports_its_health_every_interval() {
     let prefix = unique_prefix("health");
     let _estimator = Proc::spawn(
         "slope-estimator",
-        ["--service-prefix", &prefix, "--health-interval", "0.5"],
+        ["--service-prefix", &prefix, "--health-interval-s", "0.5"],
     )
     .assert_ready("estimator ready");
     let mut echo = Proc::spawn(
@@ -27,7 +27,7 @@ fn the_estimator_reports_its_health_every_interval() {
             "--json",
             "--service-prefix",
             &prefix,
-            "--timeout",
+            "--timeout-s",
             "120",
         ],
     )

@@ -170,7 +170,7 @@ fn a_python_planner_receives_real_estimates() {
             "--json",
             "--count",
             "6",
-            "--timeout",
+            "--timeout-s",
             "60",
         ],
     )

@@ -82,7 +82,7 @@ fn record_replay_of(source: &Path, out: &Path, test: &str) {
             &prefix,
             "--wait-subscribers",
             "1",
-            "--wait-timeout",
+            "--wait-timeout-s",
             "30",
             // Slow enough that the recorder (PNG encoding) never falls behind.
             "--rate",

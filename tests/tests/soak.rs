@@ -184,7 +184,7 @@ fn replay_estimator_subscriber_soak_drops_nothing_and_stays_flat() {
             &max_frames,
             "--wait-subscribers",
             "1",
-            "--wait-timeout",
+            "--wait-timeout-s",
             "20",
         ],
     );

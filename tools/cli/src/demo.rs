@@ -64,7 +64,7 @@ pub struct DemoArgs {
     pub rate: Option<f64>,
 
     /// Give up if the chain produces nothing for this many seconds.
-    #[arg(long, default_value_t = 20.0, value_parser = positive_f64)]
+    #[arg(long = "stall-timeout-s", alias = "stall-timeout", default_value_t = 20.0, value_parser = positive_f64)]
     pub stall_timeout: f64,
 
     #[command(flatten)]
@@ -232,7 +232,7 @@ pub fn run(args: &DemoArgs, stop: &StopFlag) -> anyhow::Result<DemoSummary> {
     replay_cmd
         .arg(&recording_dir)
         .args(["--service-prefix", &prefix, "--wait-subscribers", "1"])
-        .args(["--wait-timeout", "30"])
+        .args(["--wait-timeout-s", "30"])
         .arg(child_log);
     if let Some(rate) = args.rate {
         replay_cmd.args(["--rate", &rate.to_string()]);

@@ -21,7 +21,7 @@ use crate::replay::positive_f64;
     after_help = "Examples:
   slope-echo                          # readable lines until Ctrl-C
   slope-echo --json | jq .slope_deg   # one JSON object per line
-  slope-echo --count 10 --timeout 5   # ten estimates, fail if they take over 5 s
+  slope-echo --count 10 --timeout-s 5   # ten estimates, fail if they take over 5 s
   slope-echo --health                 # the daemons' health reports instead
 
 Readable lines show the slope ± its spread, the distance ahead, the tracked slope ± its \
@@ -47,7 +47,7 @@ pub struct EchoArgs {
     pub json: bool,
 
     /// Print the daemons' health reports (topic PREFIX/health) instead of
-    /// estimates; --count and --timeout then count reports.
+    /// estimates; --count and --timeout-s then count reports.
     #[arg(long)]
     pub health: bool,
 
@@ -57,7 +57,7 @@ pub struct EchoArgs {
 
     /// Exit after this many seconds: status 0 when no --count was given,
     /// non-zero when fewer than --count estimates arrived.
-    #[arg(long, value_parser = positive_f64)]
+    #[arg(long = "timeout-s", alias = "timeout", value_parser = positive_f64)]
     pub timeout: Option<f64>,
 
     #[command(flatten)]
@@ -259,7 +259,7 @@ struct Topic {
 }
 
 /// Prints the lines `next` makes (`None`: nothing waiting) until --count,
-/// --timeout or a stop; returns how many were printed.
+/// --timeout-s or a stop; returns how many were printed.
 fn echo(
     args: &EchoArgs,
     stop: &StopFlag,

@@ -36,7 +36,7 @@ Stops cleanly on SIGINT or SIGTERM.",
   slope-estimator --config estimator.toml --print-config   # every parameter in effect, then exit
   slope-estimator --service-prefix robot2 -v   # another stack, debug logs
 
-Health: a report on <prefix>/health every --health-interval seconds (frames in/out/dropped, \
+Health: a report on <prefix>/health every --health-interval-s seconds (frames in/out/dropped, \
 rates, capture-to-publish latency and per-stage median/p95/max ms over that interval, the last \
 error); `slope-echo --health` shows it. The same summary over 10 s goes to the log at INFO."
 )]
@@ -64,14 +64,19 @@ pub struct EstimatorArgs {
 
     /// Seconds between health reports on the topic PREFIX/health (0: none, the
     /// summary is still logged every 10 s).
-    #[arg(long, default_value_t = DEFAULT_HEALTH_INTERVAL_S, value_parser = health_interval_arg)]
+    #[arg(
+        long = "health-interval-s",
+        alias = "health-interval",
+        default_value_t = DEFAULT_HEALTH_INTERVAL_S,
+        value_parser = health_interval_arg
+    )]
     pub health_interval: f64,
 
     #[command(flatten)]
     pub common: CommonArgs,
 }
 
-/// `--health-interval`: 0 (off) or 0.05-3600 seconds.
+/// `--health-interval-s`: 0 (off) or 0.05-3600 seconds.
 pub fn health_interval_arg(text: &str) -> Result<f64, String> {
     let value: f64 = text
         .parse()

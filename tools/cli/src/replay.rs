@@ -55,7 +55,7 @@ pub struct ReplayArgs {
 
     /// Give up (non-zero exit) if the subscribers are not there after this
     /// many seconds; waits forever when not given.
-    #[arg(long, value_parser = positive_f64)]
+    #[arg(long = "wait-timeout-s", alias = "wait-timeout", value_parser = positive_f64)]
     pub wait_timeout: Option<f64>,
 
     /// Skip frames whose images are missing or broken (with a warning)
@@ -65,7 +65,7 @@ pub struct ReplayArgs {
 
     /// Keep the publisher up this long after the last frame, so that
     /// subscribers still read what is queued for them (skipped on Ctrl-C).
-    #[arg(long, default_value_t = 1.0, value_parser = positive_f64)]
+    #[arg(long = "linger-s", alias = "linger", default_value_t = 1.0, value_parser = positive_f64)]
     pub linger: f64,
 
     /// Largest cloud (width x height) to accept.

@@ -66,7 +66,7 @@ fn bad_values_are_refused() {
     assert!(stderr.contains("paper, least-squares or tls"), "{stderr}");
     // Values that would overflow a clock are refused, not panicked on.
     let echo = env!("CARGO_BIN_EXE_slope-echo");
-    let (ok, _, stderr) = run(echo, &["--timeout", "1e300"]);
+    let (ok, _, stderr) = run(echo, &["--timeout-s", "1e300"]);
     assert!(!ok);
     assert!(stderr.contains("from 0.001 to 10000000"), "{stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");
