@@ -19,10 +19,10 @@ use crate::replay::positive_f64;
     version,
     about = "Print slope estimates from the estimate topic (or health reports), one line each",
     after_help = "Examples:
-  slope-echo                          # readable lines until Ctrl-C
-  slope-echo --json | jq .slope_deg   # one JSON object per line
+  slope-echo                            # readable lines until Ctrl-C
+  slope-echo --json | jq .slope_deg     # one JSON object per line
   slope-echo --count 10 --timeout-s 5   # ten estimates, fail if they take over 5 s
-  slope-echo --health                 # the daemons' health reports instead
+  slope-echo --health                   # the daemons' health reports instead
 
 Readable lines show the slope ± its spread, the distance ahead, the tracked slope ± its \
 spread (- without a track) and the confidence (with the reasons when below 1).
