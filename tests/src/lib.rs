@@ -259,6 +259,33 @@ fn recv_until(rx: &Receiver<String>, deadline: Instant) -> Option<String> {
     rx.recv_timeout(timeout).ok()
 }
 
+/// Starts `slope-replay` on the bundled recording `name` under `prefix`:
+/// `frames` frames at `rate_hz`, once `subscribers` are connected to the
+/// cloud topic.
+pub fn replay_frames(
+    prefix: &str,
+    name: &str,
+    rate_hz: f64,
+    frames: u64,
+    subscribers: usize,
+) -> Proc {
+    let dir = recording(name);
+    Proc::spawn(
+        "slope-replay",
+        [
+            dir.to_str().expect("utf-8 path"),
+            "--service-prefix",
+            prefix,
+            "--rate",
+            &rate_hz.to_string(),
+            "--max-frames",
+            &frames.to_string(),
+            "--wait-subscribers",
+            &subscribers.to_string(),
+        ],
+    )
+}
+
 /// A deadline `seconds` from now.
 pub fn deadline(seconds: f64) -> Instant {
     Instant::now() + Duration::from_secs_f64(seconds)

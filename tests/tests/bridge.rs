@@ -8,7 +8,7 @@ use std::net::TcpListener;
 use std::time::{Duration, Instant};
 
 use serde_json::Value;
-use slope_integration_tests::{deadline, recording, unique_prefix, Proc};
+use slope_integration_tests::{deadline, replay_frames, unique_prefix, Proc};
 use zenoh::Wait;
 
 /// A TCP port nobody listens on now.
@@ -70,27 +70,14 @@ fn every_estimate_crosses_the_bridge_as_versioned_json() {
     assert_eq!(report["component"], "estimator", "{report}");
 
     let frames = 8;
-    let mut replay = Proc::spawn(
-        "slope-replay",
-        [
-            recording("ramp16").to_str().expect("utf-8 path"),
-            "--service-prefix",
-            &prefix,
-            "--rate",
-            "5",
-            "--max-frames",
-            &frames.to_string(),
-            "--wait-subscribers",
-            "1",
-        ],
-    );
+    let mut replay = replay_frames(&prefix, "ramp16", 5.0, frames, 1);
     // Every estimate the estimator published, in order, up to the last
     // frame (the newest frame is never superseded; a loaded machine may
     // make the estimator skip one before it, which it then counts).
     let until = deadline(60.0);
     let mut seen = Vec::new();
     let mut dropped = 0;
-    while seen.last() != Some(&(frames as u64 - 1)) {
+    while seen.last() != Some(&(frames - 1)) {
         let Some(e) = next_json(&estimates, until) else {
             break;
         };
@@ -101,14 +88,9 @@ fn every_estimate_crosses_the_bridge_as_versioned_json() {
         dropped = e["dropped_frames"].as_u64().expect("dropped_frames");
         seen.push(e["frame"].as_u64().expect("frame"));
     }
-    assert_eq!(
-        seen.last(),
-        Some(&(frames as u64 - 1)),
-        "{}",
-        bridge.diagnostics()
-    );
+    assert_eq!(seen.last(), Some(&(frames - 1)), "{}", bridge.diagnostics());
     assert!(seen.windows(2).all(|w| w[0] < w[1]), "{seen:?}");
-    assert_eq!(seen.len() as u64 + dropped, frames as u64, "{seen:?}");
+    assert_eq!(seen.len() as u64 + dropped, frames, "{seen:?}");
     replay.assert_exits_zero_within(Duration::from_secs(30));
     bridge.signal(nix::sys::signal::Signal::SIGTERM);
     bridge.assert_exits_zero_within(Duration::from_secs(5));

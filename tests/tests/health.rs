@@ -4,7 +4,7 @@
 //! the rates and latencies are those of a running pipeline.
 
 use serde_json::Value;
-use slope_integration_tests::{deadline, recording, unique_prefix, Proc};
+use slope_integration_tests::{deadline, replay_frames, unique_prefix, Proc};
 
 fn number(v: &Value, key: &str) -> f64 {
     v[key]
@@ -33,20 +33,7 @@ fn the_estimator_reports_its_health_every_interval() {
     )
     .assert_ready("subscribed to health reports");
     let frames = 12;
-    let mut replay = Proc::spawn(
-        "slope-replay",
-        [
-            recording("ramp16").to_str().expect("utf-8 path"),
-            "--service-prefix",
-            &prefix,
-            "--rate",
-            "10",
-            "--max-frames",
-            &frames.to_string(),
-            "--wait-subscribers",
-            "1",
-        ],
-    );
+    let mut replay = replay_frames(&prefix, "ramp16", 10.0, frames, 1);
     replay.assert_exits_zero_within(std::time::Duration::from_secs(60));
 
     // Reports until one has seen every frame out.

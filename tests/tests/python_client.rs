@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use serde_json::Value;
-use slope_integration_tests::{deadline, recording, repo_root, unique_prefix, Proc};
+use slope_integration_tests::{deadline, replay_frames, repo_root, unique_prefix, Proc};
 use slope_ipc_types::layout::{self, FieldLayout};
 use slope_ipc_types::{confidence, EstimateStatus, SlopeMethod};
 
@@ -175,20 +175,7 @@ fn a_python_planner_receives_real_estimates() {
         ],
     )
     .assert_ready(&format!("subscribed to {prefix}/estimate"));
-    let mut replay = Proc::spawn(
-        "slope-replay",
-        [
-            recording("ramp16").to_str().expect("utf-8 path"),
-            "--service-prefix",
-            &prefix,
-            "--rate",
-            "10",
-            "--max-frames",
-            "6",
-            "--wait-subscribers",
-            "1",
-        ],
-    );
+    let mut replay = replay_frames(&prefix, "ramp16", 10.0, 6, 1);
     let until = deadline(60.0);
     let mut frames = Vec::new();
     while frames.len() < 6 {

@@ -7,7 +7,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::time::Duration;
 
 use serde_json::Value;
-use slope_integration_tests::{recording, unique_prefix, Proc};
+use slope_integration_tests::{replay_frames, unique_prefix, Proc};
 
 #[test]
 fn an_mcap_recording_holds_each_frame_and_its_estimate() {
@@ -30,20 +30,7 @@ fn an_mcap_recording_holds_each_frame_and_its_estimate() {
     )
     .assert_ready("recording the cloud topic");
     let frames = 6u64;
-    let mut replay = Proc::spawn(
-        "slope-replay",
-        [
-            recording("ramp16").to_str().expect("utf-8 path"),
-            "--service-prefix",
-            &prefix,
-            "--rate",
-            "4",
-            "--max-frames",
-            &frames.to_string(),
-            "--wait-subscribers",
-            "2",
-        ],
-    );
+    let mut replay = replay_frames(&prefix, "ramp16", 4.0, frames, 2);
     replay.assert_exits_zero_within(Duration::from_secs(60));
     record.assert_exits_zero_within(Duration::from_secs(30));
 
