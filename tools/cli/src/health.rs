@@ -81,6 +81,9 @@ pub struct HealthMonitor {
     /// The report window (about a second) and the log window.
     report: Window,
     log: Window,
+    /// Whether reports are made at all (else the report window would
+    /// only grow).
+    reporting: bool,
 }
 
 impl HealthMonitor {
@@ -92,7 +95,15 @@ impl HealthMonitor {
             totals: Health::new(component),
             report: Window::new(now),
             log: Window::new(now),
+            reporting: true,
         }
+    }
+
+    /// Stops (or resumes) keeping the report window: for a daemon that
+    /// only logs its summary.
+    pub fn set_reporting(&mut self, on: bool) {
+        self.reporting = on;
+        self.report = Window::new(Instant::now());
     }
 
     /// `n` frames came in.
@@ -122,7 +133,12 @@ impl HealthMonitor {
     /// and its stage times in pipeline order, `total` included.
     pub fn frame_out(&mut self, latency_ms: Option<f64>, stages: &[(&'static str, f64)]) {
         self.totals.frames_out += 1;
-        for window in [&mut self.report, &mut self.log] {
+        let windows = if self.reporting {
+            [Some(&mut self.report), Some(&mut self.log)]
+        } else {
+            [None, Some(&mut self.log)]
+        };
+        for window in windows.into_iter().flatten() {
             window.frames_out += 1;
             if let Some(ms) = latency_ms.filter(|ms| ms.is_finite()) {
                 window.latency_ms.push(ms);
@@ -194,9 +210,12 @@ impl HealthReporter {
         interval_s: f64,
     ) -> Self {
         let interval = Duration::from_secs_f64(interval_s.max(0.0));
+        let publisher = publisher.filter(|_| !interval.is_zero());
+        let mut monitor = HealthMonitor::new(component);
+        monitor.set_reporting(publisher.is_some());
         Self {
-            monitor: HealthMonitor::new(component),
-            publisher: publisher.filter(|_| !interval.is_zero()),
+            monitor,
+            publisher,
             interval,
             last: Instant::now(),
         }
@@ -302,6 +321,18 @@ mod tests {
         assert_eq!(h.stage("total").unwrap().count, 0);
         assert_eq!(h.latency.count, 0);
         assert!(h.latency.median_ms.is_nan());
+    }
+
+    /// Without reports (only the log), the report window keeps nothing.
+    #[test]
+    fn a_daemon_that_only_logs_keeps_no_report_window() {
+        let mut reporter = HealthReporter::new(HealthComponent::Estimator, None, 1.0);
+        for _ in 0..1000 {
+            reporter.monitor.frame_out(Some(1.0), &[("total", 2.0)]);
+        }
+        assert!(reporter.monitor.report.latency_ms.is_empty());
+        assert!(reporter.monitor.report.stages.is_empty());
+        assert_eq!(reporter.monitor.log.latency_ms.len(), 1000);
     }
 
     #[test]
