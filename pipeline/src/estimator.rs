@@ -231,8 +231,9 @@ impl Estimator {
 
     /// What the last frame's stages saw. Planes and roles are always
     /// there; the normals only with [`Self::set_inspect`]. After a frame
-    /// that failed early (bad frame, too few points) the planes may be
-    /// those of an earlier frame and the roles are empty.
+    /// that failed before segmentation (bad frame, too few points) the
+    /// roles and normals are empty and the planes may be those of an
+    /// earlier frame.
     pub fn inspection(&self) -> Inspection<'_> {
         Inspection {
             planes: self.segmenter.planes(),
@@ -294,16 +295,16 @@ impl Estimator {
         frame_index: u64,
         clock: &mut Stopwatch,
     ) -> Result<Estimate, EstimateStatus> {
-        if !cloud.is_well_formed() {
-            return Err(EstimateStatus::BadFrame);
-        }
-        let mut rng = ChaCha8Rng::seed_from_u64(self.config.seed);
-        rng.set_stream(frame_index);
         self.roles.ground.clear();
         self.roles.inclined = None;
         if let Some(seen) = &mut self.paper.inspected {
             seen.clear();
         }
+        if !cloud.is_well_formed() {
+            return Err(EstimateStatus::BadFrame);
+        }
+        let mut rng = ChaCha8Rng::seed_from_u64(self.config.seed);
+        rng.set_stream(frame_index);
         self.remove_outliers(cloud)?;
         clock.lap("outlier");
         self.segmenter
