@@ -286,6 +286,28 @@ pub fn replay_frames(
     )
 }
 
+/// Reads datagrams from a notify socket (what systemd would receive) into
+/// `seen` until a line of one starts with `until` or `by` passes; true when
+/// such a line was seen.
+pub fn read_notify_until(
+    socket: &std::os::unix::net::UnixDatagram,
+    seen: &mut Vec<String>,
+    until: &str,
+    by: Instant,
+) -> bool {
+    let found = |seen: &[String]| seen.iter().any(|m| m.lines().any(|l| l.starts_with(until)));
+    let mut buf = [0u8; 4096];
+    while Instant::now() < by {
+        if found(seen) {
+            return true;
+        }
+        if let Ok(n) = socket.recv(&mut buf) {
+            seen.push(String::from_utf8_lossy(&buf[..n]).into_owned());
+        }
+    }
+    found(seen)
+}
+
 /// A deadline `seconds` from now.
 pub fn deadline(seconds: f64) -> Instant {
     Instant::now() + Duration::from_secs_f64(seconds)

@@ -6,7 +6,7 @@
 use std::time::{Duration, Instant};
 
 use nix::sys::signal::Signal;
-use slope_integration_tests::{deadline, unique_prefix, Proc};
+use slope_integration_tests::{deadline, read_notify_until, unique_prefix, Proc};
 use slope_sensor::device_lock::{DeviceLock, LOCK_DIR_ENV};
 use slope_sensor::kinect2::LOCK_KIND;
 
@@ -94,25 +94,6 @@ fn list_says_no_kinect_found_on_stdout_and_exits_zero() {
     assert_eq!(capture.stdout_line(deadline(1.0)), None, "one line only");
 }
 
-/// Datagrams on `socket` until one starts with `until` or `by` passes.
-fn read_until(
-    socket: &std::os::unix::net::UnixDatagram,
-    seen: &mut Vec<String>,
-    until: &str,
-    by: Instant,
-) -> bool {
-    let mut buf = [0u8; 4096];
-    while Instant::now() < by {
-        if seen.iter().any(|m| m.lines().any(|l| l.starts_with(until))) {
-            return true;
-        }
-        if let Ok(n) = socket.recv(&mut buf) {
-            seen.push(String::from_utf8_lossy(&buf[..n]).into_owned());
-        }
-    }
-    seen.iter().any(|m| m.lines().any(|l| l.starts_with(until)))
-}
-
 /// The notify protocol of the real slope-capture without a device: while
 /// it waits for one it pings the watchdog and extends its start-up time
 /// (never READY=1: nothing streams), and on SIGTERM says STOPPING=1; a
@@ -134,12 +115,12 @@ fn waiting_and_failing_are_told_to_systemd() {
     );
     let mut seen = Vec::new();
     assert!(
-        read_until(&socket, &mut seen, "EXTEND_TIMEOUT_USEC=", deadline(10.0)),
+        read_notify_until(&socket, &mut seen, "EXTEND_TIMEOUT_USEC=", deadline(10.0)),
         "{seen:?}\n{}",
         capture.diagnostics()
     );
     assert!(
-        read_until(&socket, &mut seen, "WATCHDOG=1", deadline(5.0)),
+        read_notify_until(&socket, &mut seen, "WATCHDOG=1", deadline(5.0)),
         "{seen:?}"
     );
     assert!(
@@ -149,7 +130,7 @@ fn waiting_and_failing_are_told_to_systemd() {
     );
     capture.signal(Signal::SIGTERM);
     assert!(
-        read_until(&socket, &mut seen, "STOPPING=1", deadline(5.0)),
+        read_notify_until(&socket, &mut seen, "STOPPING=1", deadline(5.0)),
         "{seen:?}"
     );
     assert!(capture
@@ -164,7 +145,7 @@ fn waiting_and_failing_are_told_to_systemd() {
     );
     let mut seen = Vec::new();
     assert!(
-        read_until(&socket, &mut seen, "STATUS=failed:", deadline(10.0)),
+        read_notify_until(&socket, &mut seen, "STATUS=failed:", deadline(10.0)),
         "{seen:?}\n{}",
         failing.diagnostics()
     );

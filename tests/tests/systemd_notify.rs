@@ -7,21 +7,7 @@ use std::os::unix::net::UnixDatagram;
 use std::time::{Duration, Instant};
 
 use nix::sys::signal::Signal;
-use slope_integration_tests::{deadline, recording, unique_prefix, Proc};
-
-/// Datagrams until `until` is among them or `by` passes.
-fn read_until(socket: &UnixDatagram, seen: &mut Vec<String>, until: &str, by: Instant) -> bool {
-    let mut buf = [0u8; 4096];
-    while Instant::now() < by {
-        if seen.iter().any(|m| m.lines().any(|l| l.starts_with(until))) {
-            return true;
-        }
-        if let Ok(n) = socket.recv(&mut buf) {
-            seen.push(String::from_utf8_lossy(&buf[..n]).into_owned());
-        }
-    }
-    seen.iter().any(|m| m.lines().any(|l| l.starts_with(until)))
-}
+use slope_integration_tests::{deadline, read_notify_until, recording, unique_prefix, Proc};
 
 #[test]
 fn the_estimator_speaks_the_notify_protocol() {
@@ -40,7 +26,7 @@ fn the_estimator_speaks_the_notify_protocol() {
     );
     let mut seen = Vec::new();
     assert!(
-        read_until(&socket, &mut seen, "READY=1", deadline(20.0)),
+        read_notify_until(&socket, &mut seen, "READY=1", deadline(20.0)),
         "{seen:?}\n{}",
         estimator.diagnostics()
     );
@@ -57,7 +43,7 @@ fn the_estimator_speaks_the_notify_protocol() {
     );
     // The watchdog is pinged at half its interval, the status says how it goes.
     assert!(
-        read_until(&socket, &mut seen, "WATCHDOG=1", deadline(5.0)),
+        read_notify_until(&socket, &mut seen, "WATCHDOG=1", deadline(5.0)),
         "{seen:?}"
     );
     let by = deadline(20.0);
@@ -66,7 +52,7 @@ fn the_estimator_speaks_the_notify_protocol() {
             .iter()
             .any(|m| m.starts_with("STATUS=") && !m.contains("STATUS=0 frames"))
     {
-        read_until(
+        read_notify_until(
             &socket,
             &mut seen,
             "never",
@@ -85,7 +71,7 @@ fn the_estimator_speaks_the_notify_protocol() {
     replay.wait_exit(deadline(20.0));
     estimator.signal(Signal::SIGTERM);
     assert!(
-        read_until(&socket, &mut seen, "STOPPING=1", deadline(5.0)),
+        read_notify_until(&socket, &mut seen, "STOPPING=1", deadline(5.0)),
         "{seen:?}"
     );
     let exit = estimator.wait_exit(deadline(5.0));
