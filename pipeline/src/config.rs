@@ -1,5 +1,6 @@
 //! [`EstimatorConfig`]: every parameter of the pipeline, with the paper's
-//! values as defaults, read from TOML.
+//! values as defaults, read from TOML. Each stage owns its section's struct
+//! and range checks; this file only assembles them.
 //!
 //! ```toml
 //! method = "paper"          # "paper" | "least-squares" | "tls"
@@ -35,7 +36,15 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use slope_ipc_types::SlopeMethod;
 
 use crate::sensor_noise::NoiseModel;
+use crate::validate::InvalidValue;
 
+pub use crate::cosine_kmeans::KmeansConfig;
+pub use crate::cumulative_angle::CumulativeConfig;
+pub use crate::normals::NormalsConfig;
+pub use crate::pass_through::PassThroughConfig;
+pub use crate::ransac_planes::RansacConfig;
+pub use crate::selection::SelectionConfig;
+pub use crate::statistical_outlier::OutlierConfig;
 pub use crate::tracking::TrackingConfig;
 
 /// The method named on command lines and in config files:
@@ -49,12 +58,8 @@ pub fn parse_method(name: &str) -> Option<SlopeMethod> {
 pub enum ConfigError {
     #[error("estimator config is not valid TOML or has an unknown key")]
     Parse(#[from] toml::de::Error),
-    #[error("estimator config key `{key}` = {value}: {reason}")]
-    Invalid {
-        key: &'static str,
-        value: String,
-        reason: &'static str,
-    },
+    #[error("estimator config key {0}")]
+    Invalid(InvalidValue),
 }
 
 /// All parameters of the estimator. `Default` holds the paper's values where
@@ -98,276 +103,6 @@ impl Default for EstimatorConfig {
     }
 }
 
-/// Statistical outlier removal (`statistical_outlier.rs`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct OutlierConfig {
-    pub enabled: bool,
-    /// m: neighbours whose mean distance is the point's statistic (paper: 20).
-    pub neighbours: usize,
-    /// alpha: drop points beyond mean + alpha * std (paper: 2).
-    pub std_ratio: f64,
-}
-
-impl Default for OutlierConfig {
-    fn default() -> Self {
-        Self {
-            enabled: true,
-            neighbours: 20,
-            std_ratio: 2.0,
-        }
-    }
-}
-
-/// RANSAC plane segmentation (`ransac_planes.rs`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct RansacConfig {
-    /// A point within this distance of a plane is an inlier, metres...
-    pub distance_threshold_m: f64,
-    /// ...or within this times its squared depth (metres per square metre),
-    /// whichever is larger: depth noise and quantisation grow with the
-    /// square of the depth (a Kinect v1 quantises 5 m to 7 cm terraces).
-    pub distance_threshold_per_m2: f64,
-    /// Hypotheses drawn per plane at most (fewer when `confidence` is reached).
-    pub max_iterations: usize,
-    /// Probability of drawing at least one all-inlier sample, which sets the
-    /// adaptive iteration count.
-    pub confidence: f64,
-    /// Planes are found on every `sample_stride_px`-th pixel in both
-    /// directions (the sample grid); at the end every pixel within the
-    /// threshold goes to the nearest of the planes that took the sample
-    /// points around it (its 3x3 sample cells).
-    pub sample_stride_px: usize,
-    /// A sample point whose local normal is further than this from the
-    /// hypothesis' normal is not its inlier, degrees; 0 or >= 90 disables.
-    pub normal_threshold_deg: f64,
-    /// A plane's region on the sample grid must stand for at least this
-    /// many pixels (`min_plane_points / stride^2` sample points), else its
-    /// sample inliers are set aside as a failure (the 9th failure ends the
-    /// search); planes with fewer pixels in the end are dropped.
-    pub min_plane_points: usize,
-    /// Stop when fewer than this fraction of the sample points is free
-    /// (neither in a plane nor set aside by a failure).
-    pub min_remaining_fraction: f64,
-    /// Stop after this many planes (at most 65,535).
-    pub max_planes: usize,
-}
-
-impl Default for RansacConfig {
-    fn default() -> Self {
-        Self {
-            distance_threshold_m: 0.02,
-            distance_threshold_per_m2: 0.003,
-            max_iterations: 500,
-            confidence: 0.999,
-            sample_stride_px: 4,
-            normal_threshold_deg: 30.0,
-            min_plane_points: 800,
-            min_remaining_fraction: 0.03,
-            max_planes: 24,
-        }
-    }
-}
-
-/// Pass-through filter (`pass_through.rs`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct PassThroughConfig {
-    /// A plane with more points is cut down to at most this many (paper: 10,000).
-    pub max_points: usize,
-}
-
-impl Default for PassThroughConfig {
-    fn default() -> Self {
-        Self { max_points: 10_000 }
-    }
-}
-
-/// Normal estimation (`normals.rs`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct NormalsConfig {
-    /// K: neighbours of the local plane fit (paper: 100).
-    pub neighbours: usize,
-    /// Largest pixel window radius tried before the k-d tree takes over.
-    pub max_window_radius_px: usize,
-    /// Fit each neighbourhood for depth noise along the viewing ray
-    /// (`C^-1 r`) instead of isotropic noise (the smallest eigenvector, as
-    /// the paper); see `normals.rs`.
-    pub ray_noise_correction: bool,
-    /// Keep only the normals of interior points, whose smallest window
-    /// holds K of the plane's points (border points see one side of their
-    /// neighbourhood, and on real surfaces the mixed pixels and multipath of
-    /// the edge); all normals when fewer than K or a tenth are interior.
-    pub interior_only: bool,
-    /// The neighbourhood spans at least this radius on the surface, metres
-    /// (more than K points near the camera); 0 = K points only.
-    pub min_patch_radius_m: f64,
-    /// ...and at least this many times the RMS distance of the plane's
-    /// RANSAC inliers from their TLS plane (depth noise, quantisation and
-    /// roughness together): the noise bias of a local PCA normal is about
-    /// `2 (sigma / r)^2` radians, 0.3 degrees at 20; 0 = off.
-    pub patch_per_rms: f64,
-}
-
-impl Default for NormalsConfig {
-    fn default() -> Self {
-        Self {
-            neighbours: 100,
-            max_window_radius_px: 80,
-            ray_noise_correction: false,
-            interior_only: true,
-            min_patch_radius_m: 0.1,
-            patch_per_rms: 20.0,
-        }
-    }
-}
-
-impl NormalsConfig {
-    /// This configuration for a plane whose RANSAC inliers lie `rms_m` (RMS)
-    /// from their TLS plane: the patch radius grows to `patch_per_rms *
-    /// rms_m` when that is larger than `min_patch_radius_m`.
-    pub fn for_plane_noise(&self, rms_m: f64) -> NormalsConfig {
-        let scaled = self.patch_per_rms * rms_m;
-        NormalsConfig {
-            min_patch_radius_m: if scaled.is_finite() {
-                self.min_patch_radius_m.max(scaled)
-            } else {
-                self.min_patch_radius_m
-            },
-            ..self.clone()
-        }
-    }
-}
-
-/// Cosine k-means (`cosine_kmeans.rs`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct KmeansConfig {
-    /// Clusters per plane; the largest is kept.
-    pub clusters: usize,
-    pub max_iterations: usize,
-    /// Clusters whose centre is within this many RMS spreads of the dominant
-    /// cluster's centre are kept with it (one population k-means cut up);
-    /// 0 keeps the dominant cluster only, as the paper.
-    pub merge_spread_ratio: f64,
-}
-
-impl Default for KmeansConfig {
-    fn default() -> Self {
-        Self {
-            clusters: 3,
-            max_iterations: 30,
-            merge_spread_ratio: 2.5,
-        }
-    }
-}
-
-/// Cumulative averaging (`cumulative_angle.rs`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct CumulativeConfig {
-    /// Random normal pairs averaged. The paper uses 100; on real Kinect
-    /// frames the per-point normals spread by ~10 degrees, which leaves a
-    /// random error of 10/sqrt(100) = 1 degree at 100 draws, so the default
-    /// is 1000 (0.3 degrees, 25 microseconds).
-    pub draws: usize,
-    /// Measure each pair's angle about the rotation axis between the two
-    /// planes' mean normals (signed), which removes the upward bias of
-    /// unsigned angles between noisy normals (`cumulative_angle.rs`); false:
-    /// the unsigned angle of each pair, as the paper.
-    pub about_axis: bool,
-}
-
-impl Default for CumulativeConfig {
-    fn default() -> Self {
-        Self {
-            draws: 1000,
-            about_axis: true,
-        }
-    }
-}
-
-/// Which plane is the ground and which the inclined plane (`selection/`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct SelectionConfig {
-    /// A plane is flat (a measurement surface) when the RMS of its inliers'
-    /// distances, each divided by its RANSAC inlier threshold, is at most
-    /// this: a flat surface scores its noise over the threshold (real
-    /// Kinect floors and walls 0.1-0.3), a surface that fills the band
-    /// evenly 0.58.
-    pub max_relative_rms: f64,
-    /// The sensor's noise model (`"kinect2"` or `"kinect1"`) that flatness
-    /// is judged against. Unset: the recording's `sensor` decides where the
-    /// frames come from a recording (`slope-eval`), else `"kinect2"` (the
-    /// camera `slope-capture` drives).
-    pub noise_model: Option<NoiseModel>,
-    /// An inclined plane (the surface the slope is measured on) is flat when
-    /// the RMS of its inliers' distances, in standard deviations of the
-    /// noise model, is at most this (real Kinect v2 risers and walls 1.2-2.6,
-    /// the Kinect v1 office walls 0.6-1.0 with their model; a bed's fabric
-    /// side 3.8-5.8).
-    pub max_noise_ratio: f64,
-    /// An inclined plane covers at least this much surface, square metres
-    /// (a 20 x 20 cm patch; real stair risers 0.07-0.14): smaller flat
-    /// patches are clutter, or pieces RANSAC carved out of a rough surface,
-    /// which look flatter the smaller they are.
-    pub inclined_min_area_m2: f64,
-    /// With a mount: a ground candidate's normal is within this of the
-    /// mount's up vector, degrees.
-    pub ground_max_tilt_deg: f64,
-    /// Without a mount: a ground candidate's normal is within this of the
-    /// camera's up (-y), degrees.
-    pub unmounted_ground_max_tilt_deg: f64,
-    /// The ground has at least this many pixels...
-    pub ground_min_pixels: usize,
-    /// ...and covers at least this much surface, square metres.
-    pub ground_min_area_m2: f64,
-    /// With a known mount height: the ground lies within this of it, metres;
-    /// no level plane does: the mount's plane is the ground.
-    pub ground_height_tolerance_m: f64,
-    /// A level plane parallel to the ground whose centroid is within this of
-    /// the ground plane is a piece of the ground, metres.
-    pub coplanar_tolerance_m: f64,
-    /// Planes whose normals are within this of each other are parallel
-    /// (treads, floor, table tops; real treads and floors differ by up to
-    /// 3.5 degrees as measured); an inclined plane differs from the ground
-    /// by more, degrees.
-    pub parallel_tolerance_deg: f64,
-    /// An inclined plane's normal is at most this from the ground's: beyond
-    /// 90 a surface faces down (a ceiling, an overhang), degrees.
-    pub max_slope_deg: f64,
-    /// An inclined plane's horizontal normal is within this of the forward
-    /// axis (a ramp ahead or a wall faced), not beside the robot, degrees.
-    pub max_heading_deg: f64,
-    /// Among inclined candidates the nearest is taken unless it has fewer than
-    /// this fraction of the best-supported candidate's inliers.
-    pub min_relative_support: f64,
-}
-
-impl Default for SelectionConfig {
-    fn default() -> Self {
-        Self {
-            max_relative_rms: 0.45,
-            noise_model: None,
-            max_noise_ratio: 3.5,
-            inclined_min_area_m2: 0.04,
-            ground_max_tilt_deg: 15.0,
-            unmounted_ground_max_tilt_deg: 50.0,
-            ground_min_pixels: 2000,
-            ground_min_area_m2: 0.1,
-            ground_height_tolerance_m: 0.15,
-            coplanar_tolerance_m: 0.05,
-            parallel_tolerance_deg: 4.0,
-            max_slope_deg: 100.0,
-            max_heading_deg: 50.0,
-            min_relative_support: 0.25,
-        }
-    }
-}
-
 impl EstimatorConfig {
     /// This configuration for frames of the named sensor (a recording's
     /// `sensor`): an unset `selection.noise_model` becomes that sensor's
@@ -389,178 +124,20 @@ impl EstimatorConfig {
 
     /// Checks every value's range; the error names the first bad key.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        fn positive(key: &'static str, v: f64) -> Result<(), ConfigError> {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(invalid(key, v, "must be a finite number > 0"))
-            }
-        }
-        fn angle(key: &'static str, v: f64) -> Result<(), ConfigError> {
-            if v.is_finite() && (0.0..=180.0).contains(&v) {
-                Ok(())
-            } else {
-                Err(invalid(key, v, "must be an angle in 0..=180 degrees"))
-            }
-        }
-        fn at_least(key: &'static str, v: usize, min: usize) -> Result<(), ConfigError> {
-            if v >= min {
-                Ok(())
-            } else {
-                Err(invalid(
-                    key,
-                    v,
-                    if min == 1 {
-                        "must be at least 1"
-                    } else {
-                        "is too small"
-                    },
-                ))
-            }
-        }
-        fn fraction(key: &'static str, v: f64) -> Result<(), ConfigError> {
-            if v.is_finite() && (0.0..=1.0).contains(&v) {
-                Ok(())
-            } else {
-                Err(invalid(key, v, "must be in 0..=1"))
-            }
-        }
-        at_least("outlier.neighbours", self.outlier.neighbours, 1)?;
-        if self.outlier.neighbours > crate::statistical_outlier::MAX_NEIGHBOURS {
-            return Err(invalid(
-                "outlier.neighbours",
-                self.outlier.neighbours,
-                "must be at most 48 (the 7x7 pixel window)",
-            ));
-        }
-        if !(self.outlier.std_ratio.is_finite() && self.outlier.std_ratio >= 0.0) {
-            return Err(invalid(
-                "outlier.std_ratio",
-                self.outlier.std_ratio,
-                "must be a finite number >= 0",
-            ));
-        }
-        positive(
-            "ransac.distance_threshold_m",
-            self.ransac.distance_threshold_m,
-        )?;
-        if !(self.ransac.distance_threshold_per_m2.is_finite()
-            && self.ransac.distance_threshold_per_m2 >= 0.0)
-        {
-            return Err(invalid(
-                "ransac.distance_threshold_per_m2",
-                self.ransac.distance_threshold_per_m2,
-                "must be a finite number >= 0",
-            ));
-        }
-        at_least("ransac.max_iterations", self.ransac.max_iterations, 1)?;
-        if !(self.ransac.confidence > 0.0 && self.ransac.confidence < 1.0) {
-            return Err(invalid(
-                "ransac.confidence",
-                self.ransac.confidence,
-                "must be in the open interval (0, 1)",
-            ));
-        }
-        at_least("ransac.sample_stride_px", self.ransac.sample_stride_px, 1)?;
-        angle(
-            "ransac.normal_threshold_deg",
-            self.ransac.normal_threshold_deg,
-        )?;
-        at_least("ransac.min_plane_points", self.ransac.min_plane_points, 3)?;
-        fraction(
-            "ransac.min_remaining_fraction",
-            self.ransac.min_remaining_fraction,
-        )?;
-        at_least("ransac.max_planes", self.ransac.max_planes, 1)?;
-        if self.ransac.max_planes > crate::ransac_planes::MAX_PLANES {
-            return Err(invalid(
-                "ransac.max_planes",
-                self.ransac.max_planes,
-                "must be at most 65535",
-            ));
-        }
-        at_least("pass_through.max_points", self.pass_through.max_points, 3)?;
-        at_least("normals.neighbours", self.normals.neighbours, 3)?;
-        at_least(
-            "normals.max_window_radius_px",
-            self.normals.max_window_radius_px,
-            1,
-        )?;
-        for (key, value) in [
-            (
-                "normals.min_patch_radius_m",
-                self.normals.min_patch_radius_m,
-            ),
-            ("normals.patch_per_rms", self.normals.patch_per_rms),
-        ] {
-            if !(value.is_finite() && value >= 0.0) {
-                return Err(invalid(key, value, "must be a finite number >= 0"));
-            }
-        }
-        at_least("kmeans.clusters", self.kmeans.clusters, 1)?;
-        at_least("kmeans.max_iterations", self.kmeans.max_iterations, 1)?;
-        if !(self.kmeans.merge_spread_ratio.is_finite() && self.kmeans.merge_spread_ratio >= 0.0) {
-            return Err(invalid(
-                "kmeans.merge_spread_ratio",
-                self.kmeans.merge_spread_ratio,
-                "must be a finite number >= 0",
-            ));
-        }
-        at_least("cumulative.draws", self.cumulative.draws, 1)?;
-        let s = &self.selection;
-        angle("selection.ground_max_tilt_deg", s.ground_max_tilt_deg)?;
-        angle(
-            "selection.unmounted_ground_max_tilt_deg",
-            s.unmounted_ground_max_tilt_deg,
-        )?;
-        angle("selection.parallel_tolerance_deg", s.parallel_tolerance_deg)?;
-        angle("selection.max_slope_deg", s.max_slope_deg)?;
-        if s.max_slope_deg <= s.parallel_tolerance_deg {
-            return Err(invalid(
-                "selection.max_slope_deg",
-                s.max_slope_deg,
-                "must be larger than selection.parallel_tolerance_deg",
-            ));
-        }
-        for (key, value) in [
-            ("selection.max_relative_rms", s.max_relative_rms),
-            ("selection.max_noise_ratio", s.max_noise_ratio),
-            ("selection.inclined_min_area_m2", s.inclined_min_area_m2),
-            ("selection.ground_min_area_m2", s.ground_min_area_m2),
-            (
-                "selection.ground_height_tolerance_m",
-                s.ground_height_tolerance_m,
-            ),
-            ("selection.coplanar_tolerance_m", s.coplanar_tolerance_m),
-        ] {
-            if !(value.is_finite() && value >= 0.0) {
-                return Err(invalid(key, value, "must be a finite number >= 0"));
-            }
-        }
-        angle("selection.max_heading_deg", s.max_heading_deg)?;
-        fraction("selection.min_relative_support", s.min_relative_support)?;
-        let t = &self.tracking;
-        at_least("tracking.window", t.window, 1)?;
-        at_least("tracking.reset_after", t.reset_after, 1)?;
-        at_least("tracking.max_missed", t.max_missed, 1)?;
-        fraction("tracking.min_confidence", t.min_confidence)?;
-        for (key, value) in [
-            ("tracking.gate_deg", t.gate_deg),
-            ("tracking.gate_sigmas", t.gate_sigmas),
-        ] {
-            if !(value.is_finite() && value >= 0.0) {
-                return Err(invalid(key, value, "must be a finite number >= 0"));
-            }
+        let sections: [(&str, Result<(), InvalidValue>); 8] = [
+            ("outlier", self.outlier.validate()),
+            ("ransac", self.ransac.validate()),
+            ("pass_through", self.pass_through.validate()),
+            ("normals", self.normals.validate()),
+            ("kmeans", self.kmeans.validate()),
+            ("cumulative", self.cumulative.validate()),
+            ("selection", self.selection.validate()),
+            ("tracking", self.tracking.validate()),
+        ];
+        for (section, result) in sections {
+            result.map_err(|e| ConfigError::Invalid(e.in_section(section)))?;
         }
         Ok(())
-    }
-}
-
-fn invalid(key: &'static str, value: impl ToString, reason: &'static str) -> ConfigError {
-    ConfigError::Invalid {
-        key,
-        value: value.to_string(),
-        reason,
     }
 }
 

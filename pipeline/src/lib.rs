@@ -42,6 +42,7 @@ pub mod selection;
 pub mod sensor_noise;
 pub mod statistical_outlier;
 pub mod tracking;
+pub mod validate;
 
 pub use cloud::CloudView;
 pub use config::{

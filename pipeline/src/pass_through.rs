@@ -23,6 +23,8 @@
 //!   are, and the normals still take their neighbourhoods from all of the
 //!   plane's points (`NormalEstimator::estimate_with_support`).
 
+use crate::validate::{at_least, InvalidValue};
+use serde::{Deserialize, Serialize};
 use slope_ipc_types::CloudPoint;
 
 /// The range a pass-through kept.
@@ -121,6 +123,27 @@ fn surface_sample(points: &[CloudPoint], kept: &mut Vec<u32>, max_points: usize)
         }
     }
     kept.truncate(out);
+}
+
+/// Pass-through filter (`pass_through.rs`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PassThroughConfig {
+    /// A plane with more points is cut down to at most this many (paper: 10,000).
+    pub max_points: usize,
+}
+
+impl Default for PassThroughConfig {
+    fn default() -> Self {
+        Self { max_points: 10_000 }
+    }
+}
+
+impl PassThroughConfig {
+    /// Checks every value's range; the error names the first bad key.
+    pub fn validate(&self) -> Result<(), InvalidValue> {
+        at_least("max_points", self.max_points, 3)
+    }
 }
 
 #[cfg(test)]

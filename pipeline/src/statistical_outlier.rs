@@ -43,7 +43,8 @@
 //! recorded frames, no verdict changed).
 
 use crate::cloud::CloudView;
-use crate::config::OutlierConfig;
+use crate::validate::{at_least, check, non_negative, InvalidValue};
+use serde::{Deserialize, Serialize};
 
 /// The largest `m` the grid search supports: all pixels of a 7x7 window.
 pub const MAX_NEIGHBOURS: usize = 48;
@@ -649,6 +650,41 @@ network!(MERGE_BITONIC20, merge_bitonic20, 40:
 const BITONIC20_ORDER: [usize; 20] = [
     0, 1, 2, 3, 16, 17, 18, 19, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15,
 ];
+
+/// Statistical outlier removal (`statistical_outlier.rs`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct OutlierConfig {
+    pub enabled: bool,
+    /// m: neighbours whose mean distance is the point's statistic (paper: 20).
+    pub neighbours: usize,
+    /// alpha: drop points beyond mean + alpha * std (paper: 2).
+    pub std_ratio: f64,
+}
+
+impl Default for OutlierConfig {
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            neighbours: 20,
+            std_ratio: 2.0,
+        }
+    }
+}
+
+impl OutlierConfig {
+    /// Checks every value's range; the error names the first bad key.
+    pub fn validate(&self) -> Result<(), InvalidValue> {
+        at_least("neighbours", self.neighbours, 1)?;
+        check(
+            self.neighbours <= MAX_NEIGHBOURS,
+            "neighbours",
+            self.neighbours,
+            "must be at most 48 (the 7x7 pixel window)",
+        )?;
+        non_negative("std_ratio", self.std_ratio)
+    }
+}
 
 #[cfg(test)]
 mod tests {

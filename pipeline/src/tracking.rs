@@ -31,6 +31,8 @@ use std::collections::VecDeque;
 use serde::{Deserialize, Serialize};
 use slope_ipc_types::EstimateStatus;
 
+use crate::validate::{at_least, fraction, non_negative, InvalidValue};
+
 /// The tracked slope after a frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TrackedSlope {
@@ -75,6 +77,18 @@ impl Default for TrackingConfig {
             reset_after: 5,
             max_missed: 30,
         }
+    }
+}
+
+impl TrackingConfig {
+    /// Checks every value's range; the error names the first bad key.
+    pub fn validate(&self) -> Result<(), InvalidValue> {
+        at_least("window", self.window, 1)?;
+        at_least("reset_after", self.reset_after, 1)?;
+        at_least("max_missed", self.max_missed, 1)?;
+        fraction("min_confidence", self.min_confidence)?;
+        non_negative("gate_deg", self.gate_deg)?;
+        non_negative("gate_sigmas", self.gate_sigmas)
     }
 }
 

@@ -7,7 +7,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::points::Points;
 use super::PlaneSegmenter;
-use crate::config::RansacConfig;
+use super::RansacConfig;
 use crate::plane_fit::{fit_tls, Plane};
 
 /// Hypotheses are scored on at most this many sample points (a stratified

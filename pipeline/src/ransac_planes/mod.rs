@@ -67,15 +67,16 @@ use nalgebra::Vector3;
 use rand_chacha::ChaCha8Rng;
 
 use crate::cloud::CloudView;
-use crate::config::RansacConfig;
 use crate::plane_fit::{fit_tls, MomentSums, Moments, Plane};
 
+mod config;
 mod hypotheses;
 mod labelling;
 mod points;
 mod regions;
 mod sample;
 
+pub use config::RansacConfig;
 use points::{Gate, Points};
 use sample::SampleGrid;
 

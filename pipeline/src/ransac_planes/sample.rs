@@ -5,9 +5,9 @@
 use nalgebra::Vector3;
 
 use super::points::Points;
+use super::RansacConfig;
 use super::Threshold;
 use crate::cloud::{is_measured, to_vec3, CloudView};
-use crate::config::RansacConfig;
 use crate::normals::grid_normal;
 
 /// A cell without a free sample point.

@@ -25,9 +25,9 @@
 
 use nalgebra::Vector3;
 
+use super::SelectionConfig;
 use super::{is_flat, PlaneSummary};
 use crate::cloud::angle_between_deg;
-use crate::config::SelectionConfig;
 
 /// The ground as chosen: the lowest plane and every segment of it.
 #[derive(Debug, Clone, PartialEq)]

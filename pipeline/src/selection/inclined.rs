@@ -22,9 +22,9 @@
 
 use nalgebra::Vector3;
 
+use super::SelectionConfig;
 use super::{is_flat_at_noise_level, PlaneSummary};
 use crate::cloud::angle_between_deg;
-use crate::config::SelectionConfig;
 use crate::plane_fit::Plane;
 
 /// Chooses the inclined plane among `planes` not in `ground`.

@@ -23,6 +23,7 @@
 //!    back towards the robot, downhill (negative) when it points forward.
 //! 7. **Distance.** Along the optical axis to the inclined plane.
 
+mod config;
 pub mod ground;
 pub mod inclined;
 pub mod quality;
@@ -31,11 +32,11 @@ use nalgebra::Vector3;
 use slope_ipc_types::EstimateStatus;
 
 use crate::cloud::CloudView;
-use crate::config::SelectionConfig;
 use crate::plane_fit::Plane;
 use crate::ransac_planes::{SegmentedPlane, Threshold};
 use crate::sensor_noise::NoiseModel;
 
+pub use config::SelectionConfig;
 pub use ground::Ground;
 pub use inclined::{axis_distance, forward_direction, slope_sign};
 pub use quality::{plane_quality, PlaneQuality};

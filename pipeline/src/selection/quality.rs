@@ -138,8 +138,8 @@ impl Sums {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::config::RansacConfig;
     use crate::fixtures::{Scene, SceneCloud};
+    use crate::ransac_planes::RansacConfig;
 
     /// A fronto-parallel wall 2 m ahead filling the image: its area is the
     /// image's footprint at 2 m, `(W z / fx) (H z / fy)`.
