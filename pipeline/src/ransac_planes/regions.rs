@@ -4,7 +4,6 @@
 //! cells are collected as it is flooded.
 
 use super::points::Gate;
-use super::sample::cell_neighbourhood;
 use super::PlaneSegmenter;
 use crate::plane_fit::{fit_tls, Moments, Plane};
 
@@ -45,10 +44,16 @@ impl PlaneSegmenter {
             self.stack.push(seed);
             while let Some(c) = self.stack.pop() {
                 self.flooded.push(c);
-                for q in cell_neighbourhood(c as usize, cw, ch) {
-                    if self.coarse_label[q] == INLIER {
-                        self.coarse_label[q] = DONE;
-                        self.stack.push(q as u32);
+                // The 3x3 cells around `c` (`cell_neighbourhood`, unrolled
+                // by rows: the region's cells, not their order, matter).
+                let (cu, cv) = (c as usize % cw, c as usize / cw);
+                let (u0, u1) = (cu.saturating_sub(1), (cu + 2).min(cw));
+                for r in cv.saturating_sub(1)..(cv + 2).min(ch) {
+                    for q in r * cw + u0..r * cw + u1 {
+                        if self.coarse_label[q] == INLIER {
+                            self.coarse_label[q] = DONE;
+                            self.stack.push(q as u32);
+                        }
                     }
                 }
             }

@@ -75,13 +75,14 @@ impl SampleGrid {
         }
     }
 
-    /// Removes the free points whose flag is set and rebuilds the cells.
+    /// Removes the free points whose flag is set and renumbers the cells.
     pub fn remove(&mut self, remove: &[bool]) {
-        self.keep.clear();
-        self.keep
-            .extend((0..remove.len() as u32).filter(|&j| !remove[j as usize]));
-        self.points.retain(&self.keep);
-        self.rebuild_cells();
+        for (&c, &gone) in self.points.tag.iter().zip(remove) {
+            if gone {
+                self.coarse[c as usize] = NO_SAMPLE;
+            }
+        }
+        self.compact();
     }
 
     /// Removes the free points of the given cells.
@@ -89,13 +90,24 @@ impl SampleGrid {
         for &c in cells {
             self.coarse[c as usize] = NO_SAMPLE;
         }
-        // The cells still holding a free point, in raster order, are the
-        // points kept.
+        self.compact();
+    }
+
+    /// Keeps the free points whose cell still points at them (in order) and
+    /// renumbers their cells: a pass over the free points, not the grid.
+    fn compact(&mut self) {
+        let (coarse, tag) = (&self.coarse, &self.points.tag);
         self.keep.clear();
-        self.keep
-            .extend(self.coarse.iter().copied().filter(|&j| j != NO_SAMPLE));
+        self.keep.extend(
+            (0..tag.len() as u32).filter(|&j| coarse[tag[j as usize] as usize] != NO_SAMPLE),
+        );
+        if self.keep.len() == tag.len() {
+            return;
+        }
         self.points.retain(&self.keep);
-        self.rebuild_cells();
+        for (j, &c) in self.points.tag.iter().enumerate() {
+            self.coarse[c as usize] = j as u32;
+        }
     }
 
     /// The coarse cell of free point `j`.
