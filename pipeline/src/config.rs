@@ -114,6 +114,41 @@ impl EstimatorConfig {
         self
     }
 
+    /// The paper as written, every documented change switched off
+    /// (`literal/`; shipped as `pipeline/presets/paper-literal.toml`): a
+    /// k-d tree outlier filter, RANSAC scored on every point with a fixed
+    /// 2 cm threshold, the depth pass-through, PCA over exactly K = 100
+    /// nearest neighbours, all normals kept, the largest k-means cluster
+    /// only, 100 unsigned pair angles. The plane selection is ours.
+    pub fn paper_literal() -> Self {
+        use crate::literal::{
+            NormalsNeighbourhood, OutlierNeighbourhood, PassThroughMode, RansacScoring,
+        };
+        let mut c = Self::default();
+        c.outlier.neighbourhood = OutlierNeighbourhood::KdTree;
+        c.ransac.scoring = RansacScoring::EveryPoint;
+        c.ransac.distance_threshold_per_m2 = 0.0;
+        c.pass_through.mode = PassThroughMode::Depth;
+        c.normals.neighbourhood = NormalsNeighbourhood::KdTree;
+        c.normals.min_patch_radius_m = 0.0;
+        c.normals.patch_per_rms = 0.0;
+        c.normals.interior_only = false;
+        c.kmeans.merge_spread_ratio = 0.0;
+        c.cumulative.draws = 100;
+        c.cumulative.about_axis = false;
+        c
+    }
+
+    /// A named preset: `"default"` (ours) or `"paper-literal"`
+    /// ([`Self::paper_literal`]).
+    pub fn preset(name: &str) -> Option<Self> {
+        match name {
+            "default" => Some(Self::default()),
+            "paper-literal" => Some(Self::paper_literal()),
+            _ => None,
+        }
+    }
+
     /// Parses a TOML document; missing keys keep their defaults. The result
     /// is validated.
     pub fn from_toml_str(text: &str) -> Result<Self, ConfigError> {

@@ -18,6 +18,10 @@ use crate::confidence::{confidence, ChosenPlane};
 use crate::config::EstimatorConfig;
 use crate::cosine_kmeans::CosineKmeans;
 use crate::cumulative_angle::{cumulative_angle, rotation_axis};
+use crate::literal::{
+    DepthPassThrough, EveryPointRansac, KnnNormalEstimator, KnnOutlierFilter, NormalsNeighbourhood,
+    OutlierNeighbourhood, PassThroughMode, RansacScoring,
+};
 use crate::normals::NormalEstimator;
 use crate::pass_through::PassThrough;
 use crate::plane_fit::{fit_least_squares, fit_tls, Moments, Plane};
@@ -200,6 +204,9 @@ pub struct Estimator {
     outlier: StatisticalOutlierFilter,
     keep: Vec<bool>,
     segmenter: PlaneSegmenter,
+    /// The paper's stages 1 and 2 as written (`literal/`), when configured.
+    knn_outlier: KnnOutlierFilter,
+    every_point: EveryPointRansac,
     summaries: Vec<PlaneSummary>,
     /// Inlier pixels of every segment of the ground, in pixel order.
     ground_pixels: Vec<u32>,
@@ -215,6 +222,8 @@ impl Estimator {
             outlier: StatisticalOutlierFilter::new(),
             keep: Vec::new(),
             segmenter: PlaneSegmenter::new(),
+            knn_outlier: KnnOutlierFilter::new(),
+            every_point: EveryPointRansac::new(),
             summaries: Vec::new(),
             ground_pixels: Vec::new(),
             paper: PaperStages::default(),
@@ -236,7 +245,7 @@ impl Estimator {
     /// earlier frame.
     pub fn inspection(&self) -> Inspection<'_> {
         Inspection {
-            planes: self.segmenter.planes(),
+            planes: segmented(&self.segmenter, &self.every_point, &self.config),
             ground: &self.roles.ground,
             inclined: self.roles.inclined,
             normals: self.paper.inspected.as_deref().unwrap_or(&[]),
@@ -307,8 +316,16 @@ impl Estimator {
         rng.set_stream(frame_index);
         self.remove_outliers(cloud)?;
         clock.lap("outlier");
-        self.segmenter
-            .segment(cloud, &self.keep, &self.config.ransac, &mut rng);
+        match self.config.ransac.scoring {
+            RansacScoring::SampleGrid => {
+                self.segmenter
+                    .segment(cloud, &self.keep, &self.config.ransac, &mut rng);
+            }
+            RansacScoring::EveryPoint => {
+                self.every_point
+                    .segment(cloud, &self.keep, &self.config.ransac, &mut rng);
+            }
+        }
         clock.lap("ransac");
         self.summarize_planes(cloud);
         let mount_up = cloud.mount.up_vector().map(Vector3::from);
@@ -330,7 +347,7 @@ impl Estimator {
             self.roles.ground.extend_from_slice(members);
         }
         self.roles.inclined = Some(selection.inclined);
-        let planes = self.segmenter.planes();
+        let planes = segmented(&self.segmenter, &self.every_point, &self.config);
         let inclined = PlaneSegment::of(
             &planes[selection.inclined],
             &self.summaries[selection.inclined],
@@ -374,9 +391,17 @@ impl Estimator {
     /// Stage 1 into `self.keep`; too few points left is an error.
     fn remove_outliers(&mut self, cloud: &CloudView<'_>) -> Result<(), EstimateStatus> {
         let kept = if self.config.outlier.enabled {
-            self.outlier
-                .filter(cloud, &self.config.outlier, &mut self.keep)
-                .kept
+            match self.config.outlier.neighbourhood {
+                OutlierNeighbourhood::Grid => {
+                    self.outlier
+                        .filter(cloud, &self.config.outlier, &mut self.keep)
+                }
+                OutlierNeighbourhood::KdTree => {
+                    self.knn_outlier
+                        .filter(cloud, &self.config.outlier, &mut self.keep)
+                }
+            }
+            .kept
         } else {
             self.keep.clear();
             self.keep.extend(cloud.points.iter().map(is_measured));
@@ -396,7 +421,7 @@ impl Estimator {
         if let Ground::Planes(members) = ground {
             self.roles.ground.extend_from_slice(&members);
             let segment = PlaneSegment::joined(
-                self.segmenter.planes(),
+                segmented(&self.segmenter, &self.every_point, &self.config),
                 &self.summaries,
                 &members,
                 &mut self.ground_pixels,
@@ -414,11 +439,22 @@ impl Estimator {
         let noise = self.config.selection.noise_model.unwrap_or_default();
         self.summaries.clear();
         self.summaries.extend(
-            self.segmenter
-                .planes()
+            segmented(&self.segmenter, &self.every_point, &self.config)
                 .iter()
                 .map(|p| PlaneSummary::of(cloud, p, &threshold, noise)),
         );
+    }
+}
+
+/// The planes of the last segmentation, from the configured RANSAC.
+fn segmented<'a>(
+    segmenter: &'a PlaneSegmenter,
+    every_point: &'a EveryPointRansac,
+    config: &EstimatorConfig,
+) -> &'a [SegmentedPlane] {
+    match config.ransac.scoring {
+        RansacScoring::SampleGrid => segmenter.planes(),
+        RansacScoring::EveryPoint => every_point.planes(),
     }
 }
 
@@ -435,7 +471,9 @@ struct Fit {
 #[derive(Debug, Clone, Default)]
 struct PaperStages {
     pass_through: PassThrough,
+    depth_pass_through: DepthPassThrough,
     normals: NormalEstimator,
+    knn_normals: KnnNormalEstimator,
     kmeans: CosineKmeans,
     ground_normals: Vec<Vector3<f64>>,
     inclined_normals: Vec<Vector3<f64>>,
@@ -514,19 +552,44 @@ impl PaperStages {
         };
         out.clear();
         let inliers = segment.inliers;
-        let (members, _) =
-            self.pass_through
-                .filter(cloud.points, inliers, config.pass_through.max_points);
+        let max_points = config.pass_through.max_points;
+        // The depth cut is the plane from here on (the paper); the
+        // surface-uniform sample's normals see all its points.
+        let (members, support) = match config.pass_through.mode {
+            PassThroughMode::SurfaceUniform => {
+                let (kept, _) = self.pass_through.filter(cloud.points, inliers, max_points);
+                (kept, inliers)
+            }
+            PassThroughMode::Depth => {
+                let kept = self
+                    .depth_pass_through
+                    .filter(cloud.points, inliers, max_points);
+                (kept, kept)
+            }
+        };
         clock.lap("pass_through");
         // The patch grows with the plane's own noise.
         let normals_config = config.normals.for_plane_noise(segment.rms_m);
-        let (found, _) = self.normals.estimate_with_support(
-            cloud,
-            members,
-            inliers,
-            &normals_config,
-            &Vector3::zeros(),
-        );
+        let found = match config.normals.neighbourhood {
+            NormalsNeighbourhood::Window => {
+                self.normals
+                    .estimate_with_support(
+                        cloud,
+                        members,
+                        support,
+                        &normals_config,
+                        &Vector3::zeros(),
+                    )
+                    .0
+            }
+            NormalsNeighbourhood::KdTree => self.knn_normals.estimate(
+                cloud,
+                members,
+                support,
+                &normals_config,
+                &Vector3::zeros(),
+            ),
+        };
         clock.lap("normals");
         let clustering = self.kmeans.cluster(
             found,

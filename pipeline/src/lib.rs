@@ -20,6 +20,7 @@
 //! | `tracking.rs` | the slope of the plane ahead followed over frames |
 //! | `message.rs` | an estimate written into the `SlopeEstimate` message |
 //! | `estimator.rs` | orchestration and timings |
+//! | `literal/` | the paper's stages as written (k-d tree neighbours, every-point RANSAC, depth pass-through): the `paper-literal` preset |
 
 // `!(x > 0.0)` is how this crate says "not a positive number, NaN
 // included": the NaN-safe reading is the point, not a style slip.
@@ -33,6 +34,7 @@ pub mod cumulative_angle;
 pub mod estimator;
 #[doc(hidden)]
 pub mod fixtures;
+pub mod literal;
 pub mod message;
 pub mod normals;
 pub mod pass_through;

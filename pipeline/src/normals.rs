@@ -664,6 +664,9 @@ pub struct NormalsConfig {
     /// roughness together): the noise bias of a local PCA normal is about
     /// `2 (sigma / r)^2` radians, 0.3 degrees at 20; 0 = off.
     pub patch_per_rms: f64,
+    /// Pixel windows (ours) or exactly the K nearest from a k-d tree (the
+    /// paper, `literal/knn_normals.rs`).
+    pub neighbourhood: crate::literal::NormalsNeighbourhood,
 }
 
 impl Default for NormalsConfig {
@@ -675,6 +678,7 @@ impl Default for NormalsConfig {
             interior_only: true,
             min_patch_radius_m: 0.1,
             patch_per_rms: 20.0,
+            neighbourhood: crate::literal::NormalsNeighbourhood::Window,
         }
     }
 }

@@ -131,11 +131,17 @@ fn surface_sample(points: &[CloudPoint], kept: &mut Vec<u32>, max_points: usize)
 pub struct PassThroughConfig {
     /// A plane with more points is cut down to at most this many (paper: 10,000).
     pub max_points: usize,
+    /// Uniform over the surface (ours) or the nearest along the depth axis
+    /// (the paper as we read it, `literal/depth_pass_through.rs`).
+    pub mode: crate::literal::PassThroughMode,
 }
 
 impl Default for PassThroughConfig {
     fn default() -> Self {
-        Self { max_points: 10_000 }
+        Self {
+            max_points: 10_000,
+            mode: crate::literal::PassThroughMode::SurfaceUniform,
+        }
     }
 }
 

@@ -660,6 +660,9 @@ pub struct OutlierConfig {
     pub neighbours: usize,
     /// alpha: drop points beyond mean + alpha * std (paper: 2).
     pub std_ratio: f64,
+    /// Neighbours from the pixel grid (ours) or a k-d tree over the whole
+    /// cloud (the paper, `literal/knn_outlier.rs`).
+    pub neighbourhood: crate::literal::OutlierNeighbourhood,
 }
 
 impl Default for OutlierConfig {
@@ -668,6 +671,7 @@ impl Default for OutlierConfig {
             enabled: true,
             neighbours: 20,
             std_ratio: 2.0,
+            neighbourhood: crate::literal::OutlierNeighbourhood::Grid,
         }
     }
 }

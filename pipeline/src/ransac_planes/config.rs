@@ -38,6 +38,9 @@ pub struct RansacConfig {
     pub min_remaining_fraction: f64,
     /// Stop after this many planes (at most 65,535).
     pub max_planes: usize,
+    /// Score on the sample grid (ours, this module) or on every point (the
+    /// paper, `literal/every_point_ransac.rs`).
+    pub scoring: crate::literal::RansacScoring,
 }
 
 impl Default for RansacConfig {
@@ -52,6 +55,7 @@ impl Default for RansacConfig {
             min_plane_points: 800,
             min_remaining_fraction: 0.03,
             max_planes: 24,
+            scoring: crate::literal::RansacScoring::SampleGrid,
         }
     }
 }

@@ -86,6 +86,7 @@ non-zero. A second signal ends the program at once (status 130).",
   slope-eval tests/recordings/* --method all               # the three methods side by side
   slope-eval REC --json | jq .summary                      # one JSON object per recording and method
   slope-eval REC --config estimator.toml --seed 7          # parameters from a file, another seed
+  slope-eval REC --preset paper-literal                    # the paper as written (slow)
   slope-eval REC --render out/ --render-frame 12           # overlay PNG of frame 12
   slope-eval REC --render out/ --render-every 10 --export-ply out/   # every 10th frame, PNG and PLY
   slope-eval REC --method all --plot out/                  # slope and time over the frames"
@@ -109,6 +110,12 @@ pub struct EvalArgs {
     /// overrides the config file.
     #[arg(long)]
     pub seed: Option<u64>,
+
+    /// Start from a named configuration instead of a file: default (ours)
+    /// or paper-literal (the paper as written, every documented change
+    /// off; slow; the same as pipeline/presets/paper-literal.toml).
+    #[arg(long, conflicts_with = "config", value_parser = ["default", "paper-literal"])]
+    pub preset: Option<String>,
 
     /// Evaluate at most this many frames of each recording (the first ones).
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
@@ -194,7 +201,13 @@ pub fn configs(args: &EvalArgs) -> anyhow::Result<Vec<EstimatorConfig>> {
     methods
         .into_iter()
         .map(|method| {
-            let mut config = load_config(args.config.as_ref(), method)?;
+            let mut config = match args.preset.as_deref().and_then(EstimatorConfig::preset) {
+                Some(preset) => EstimatorConfig {
+                    method: method.unwrap_or(preset.method),
+                    ..preset
+                },
+                None => load_config(args.config.as_ref(), method)?,
+            };
             if let Some(seed) = args.seed {
                 config.seed = seed;
             }
@@ -1148,5 +1161,40 @@ mod tests {
         assert_eq!(names.claim(Path::new("a/ramp")), "ramp");
         assert_eq!(names.claim(Path::new("b/ramp")), "ramp-2");
         assert_eq!(names.claim(Path::new("b/wall/")), "wall");
+    }
+    #[test]
+    fn preset_paper_literal() {
+        let args = EvalArgs::try_parse_from([
+            "slope-eval",
+            "rec",
+            "--preset",
+            "paper-literal",
+            "--method",
+            "tls",
+            "--seed",
+            "3",
+        ])
+        .unwrap();
+        let expected = EstimatorConfig {
+            method: SlopeMethod::Tls,
+            seed: 3,
+            ..EstimatorConfig::paper_literal()
+        };
+        assert_eq!(configs(&args).unwrap(), vec![expected]);
+        let args = EvalArgs::try_parse_from(["slope-eval", "rec", "--preset", "default"]).unwrap();
+        assert_eq!(configs(&args).unwrap(), vec![EstimatorConfig::default()]);
+        for bad in [
+            &["slope-eval", "rec", "--preset", "paper"][..],
+            &[
+                "slope-eval",
+                "rec",
+                "--preset",
+                "default",
+                "--config",
+                "x.toml",
+            ][..],
+        ] {
+            assert!(EvalArgs::try_parse_from(bad).is_err(), "{bad:?}");
+        }
     }
 }
