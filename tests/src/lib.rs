@@ -128,6 +128,21 @@ impl Proc {
         Self::start(name, command)
     }
 
+    /// Starts binary `name` with `args`, without the environment variables
+    /// `removed` (to test what a program does when they are not set).
+    pub fn spawn_without_env<I, S>(name: &str, args: I, removed: &[&str]) -> Proc
+    where
+        I: IntoIterator<Item = S>,
+        S: AsRef<std::ffi::OsStr>,
+    {
+        let mut command = Command::new(binary(name));
+        command.args(args).env_remove("RUST_LOG");
+        for variable in removed {
+            command.env_remove(variable);
+        }
+        Self::start(name, command)
+    }
+
     /// Starts the program at `path` (not one of ours: a Python script's
     /// interpreter, say) with `args`.
     pub fn spawn_path<I, S>(path: &Path, args: I) -> Proc

@@ -7,8 +7,7 @@ use std::time::Duration;
 
 use anyhow::Context;
 use clap::Parser;
-use serde::Deserialize;
-use slope_ipc_types::{HealthComponent, Mount, DEFAULT_MAX_CLOUD_POINTS};
+use slope_ipc_types::{HealthComponent, ServiceNames, DEFAULT_MAX_CLOUD_POINTS};
 use slope_sensor::device_lock::DeviceLock;
 use slope_sensor::ipc::{create_node, CloudPublisher, HealthPublisher};
 use slope_sensor::kinect2::{
@@ -20,9 +19,11 @@ use slope_sensor::source::FrameSource;
 
 use crate::capture_notify::{publish_notifying, CaptureNotifier, SharedNotifier, SourceCounters};
 
-use crate::cli::{node_name, CommonArgs};
-use crate::health::{HealthReporter, DEFAULT_HEALTH_INTERVAL_S};
-use crate::mount_args::{check_mount, MountArgs};
+use crate::cli::{max_frames_arg, node_name, CommonArgs};
+use crate::config_file::{config_path, SlopeFile, DEFAULT_CONFIG_PATH};
+use crate::estimator::health_interval_arg;
+use crate::health::HealthReporter;
+use crate::mount_args::MountArgs;
 use crate::replay::positive_f64;
 
 #[derive(Debug, Parser)]
@@ -40,23 +41,21 @@ stop the streams and exit 0.",
   slope-capture                                         # first device, default pipeline
   slope-capture --serial 011054343347 --pipeline cl     # a given camera, OpenCL decoding
   slope-capture --pipeline cpu --depth-only             # headless, no GPU, no colour
-  slope-capture --config /etc/slope/capture.toml --wait-for-device
+  slope-capture --config slope.toml --print-config      # every setting in effect, then exit
   slope-capture --mount-height-m 0.5 --mount-pitch-deg -20
 
-Config file (every key optional; command-line flags win):
-  [kinect2]
-  serial = \"011054343347\"
-  pipeline = \"cl\"            # default, cpu, cl, clkde, cuda, cudakde, gl (gl needs a display)
-  min_depth_m = 0.5
-  max_depth_m = 4.5
-  bilateral_filter = true
-  edge_aware_filter = true
-  color = true
-  frame_timeout_s = 3.0
+Config file: the one every slope daemon reads (/etc/slope/slope.toml if it exists, or --config); \
+this program takes service_prefix, [health], [mount] and [capture] and checks the rest. \
+Command-line flags win over the file. For example:
+  service_prefix = \"slope\"
   [mount]
   height_m = 0.50
   pitch_deg = -20.0
-  roll_deg = 0.0"
+  [capture]
+  serial = \"011054343347\"
+  pipeline = \"cl\"             # default, cpu, cl, clkde, cuda, cudakde, gl (gl needs a display)
+  max_depth_m = 4.5
+  color = true"
 )]
 pub struct CaptureArgs {
     /// Print the connected Kinect v2 devices on stdout, one per line
@@ -65,9 +64,21 @@ pub struct CaptureArgs {
     #[arg(long)]
     pub list: bool,
 
-    /// TOML file with [kinect2] and [mount] settings (see below).
-    #[arg(long)]
+    /// The slope config file (see below). Without it the capture reads
+    /// /etc/slope/slope.toml if that exists.
+    #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
+
+    /// Print every setting in effect (the config file's, the defaults for
+    /// keys it leaves out, and the flags) as a config file and exit,
+    /// without opening a device.
+    #[arg(long)]
+    pub print_config: bool,
+
+    /// Seconds between health reports on the topic PREFIX/health (0: none).
+    /// Overrides [health] interval_s (default 1).
+    #[arg(long = "health-interval-s", value_name = "S", value_parser = health_interval_arg)]
+    pub health_interval: Option<f64>,
 
     /// Serial number of the Kinect v2 to open (see --list); the first one if
     /// neither this nor --device-index is given.
@@ -123,7 +134,7 @@ pub struct CaptureArgs {
     pub frame_timeout_s: Option<f64>,
 
     /// Stop after this many frames (at least 1).
-    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    #[arg(long, value_parser = max_frames_arg)]
     pub max_frames: Option<u64>,
 
     /// Largest cloud (width x height) to accept.
@@ -134,122 +145,74 @@ pub struct CaptureArgs {
     pub common: CommonArgs,
 }
 
-/// The config file: `[kinect2]` and `[mount]`, every key optional.
-#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct CaptureConfig {
-    #[serde(default)]
-    pub kinect2: Kinect2Section,
-    #[serde(default)]
-    pub mount: MountSection,
-}
-
-#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Kinect2Section {
-    pub serial: Option<String>,
-    pub device_index: Option<u32>,
-    pub pipeline: Option<String>,
-    pub gpu_device: Option<u32>,
-    pub min_depth_m: Option<f64>,
-    pub max_depth_m: Option<f64>,
-    pub bilateral_filter: Option<bool>,
-    pub edge_aware_filter: Option<bool>,
-    pub color: Option<bool>,
-    pub frame_timeout_s: Option<f64>,
-}
-
-#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct MountSection {
-    pub height_m: Option<f64>,
-    pub pitch_deg: Option<f64>,
-    pub roll_deg: Option<f64>,
-}
-
-impl CaptureConfig {
-    pub fn load(path: &Path) -> anyhow::Result<Self> {
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("cannot read the config file {}", path.display()))?;
-        toml::from_str(&text).with_context(|| format!("invalid config file {}", path.display()))
+/// The settings in effect: the config file (`--config`, else
+/// [`DEFAULT_CONFIG_PATH`] if it exists), else the defaults, with the
+/// command line over them.
+pub fn effective_config(args: &CaptureArgs) -> anyhow::Result<SlopeFile> {
+    let path = config_path(args.config.as_deref(), Path::new(DEFAULT_CONFIG_PATH));
+    let mut file = SlopeFile::load(path.as_deref())?;
+    if let Some(path) = &path {
+        tracing::info!(config = %path.display(), "settings loaded");
     }
+    apply_flags(args, &mut file);
+    file.validate().context("invalid settings")?;
+    Ok(file)
 }
 
-/// The device settings from the command line over the config file over
-/// libfreenect2's defaults.
-pub fn resolve_options(
-    args: &CaptureArgs,
-    config: &CaptureConfig,
-) -> anyhow::Result<Kinect2Options> {
-    let file = &config.kinect2;
-    let device = match (&args.serial, args.device_index) {
+/// The command line's settings over the file's.
+fn apply_flags(args: &CaptureArgs, file: &mut SlopeFile) {
+    file.service_prefix = args.common.prefix_or(&file.service_prefix);
+    if let Some(interval) = args.health_interval {
+        file.health.interval_s = interval;
+    }
+    let capture = &mut file.capture;
+    if args.serial.is_some() || args.device_index.is_some() {
+        capture.serial.clone_from(&args.serial);
+        capture.device_index = args.device_index;
+    }
+    if let Some(pipeline) = args.pipeline {
+        capture.pipeline = pipeline.name().to_string();
+    }
+    capture.gpu_device = args.gpu_device.or(capture.gpu_device);
+    capture.min_depth_m = args.min_depth_m.unwrap_or(capture.min_depth_m);
+    capture.max_depth_m = args.max_depth_m.unwrap_or(capture.max_depth_m);
+    capture.bilateral_filter = args.bilateral_filter.unwrap_or(capture.bilateral_filter);
+    capture.edge_aware_filter = args.edge_aware_filter.unwrap_or(capture.edge_aware_filter);
+    capture.color = capture.color && !args.depth_only;
+    capture.frame_timeout_s = args.frame_timeout_s.unwrap_or(capture.frame_timeout_s);
+    let mount = &mut file.mount;
+    mount.height_m = args.mount.height_m.or(mount.height_m);
+    mount.pitch_deg = args.mount.pitch_deg.or(mount.pitch_deg);
+    mount.roll_deg = args.mount.roll_deg.or(mount.roll_deg);
+}
+
+/// The device settings of a validated [`SlopeFile`] (flags applied).
+pub fn resolve_options(args: &CaptureArgs, file: &SlopeFile) -> anyhow::Result<Kinect2Options> {
+    let capture = &file.capture;
+    let device = match (&capture.serial, capture.device_index) {
         (Some(serial), _) => DeviceSelector::Serial(serial.clone()),
         (None, Some(index)) => DeviceSelector::Index(index),
-        (None, None) => match (&file.serial, file.device_index) {
-            (Some(serial), _) => DeviceSelector::Serial(serial.clone()),
-            (None, Some(index)) => DeviceSelector::Index(index),
-            (None, None) => DeviceSelector::First,
-        },
+        (None, None) => DeviceSelector::First,
     };
-    let pipeline = match (args.pipeline, &file.pipeline) {
-        (Some(pipeline), _) => pipeline,
-        (None, Some(name)) => name
-            .parse()
-            .with_context(|| "in the config file's [kinect2] pipeline".to_string())?,
-        (None, None) => Pipeline::Default,
-    };
-    let defaults = DepthConfig::default();
+    let pipeline: Pipeline = capture
+        .pipeline
+        .parse()
+        .context("in the settings' [capture] pipeline")?;
     let depth = DepthConfig {
-        min_depth_m: args
-            .min_depth_m
-            .or(file.min_depth_m)
-            .map_or(defaults.min_depth_m, |m| m as f32),
-        max_depth_m: args
-            .max_depth_m
-            .or(file.max_depth_m)
-            .map_or(defaults.max_depth_m, |m| m as f32),
-        bilateral_filter: args
-            .bilateral_filter
-            .or(file.bilateral_filter)
-            .unwrap_or(defaults.bilateral_filter),
-        edge_aware_filter: args
-            .edge_aware_filter
-            .or(file.edge_aware_filter)
-            .unwrap_or(defaults.edge_aware_filter),
+        min_depth_m: capture.min_depth_m as f32,
+        max_depth_m: capture.max_depth_m as f32,
+        bilateral_filter: capture.bilateral_filter,
+        edge_aware_filter: capture.edge_aware_filter,
     };
-    if !(depth.min_depth_m > 0.0
-        && depth.max_depth_m.is_finite()
-        && depth.max_depth_m > depth.min_depth_m)
-    {
-        anyhow::bail!(
-            "the depth range {} m .. {} m is empty; min_depth_m must be positive and below max_depth_m",
-            depth.min_depth_m,
-            depth.max_depth_m
-        );
-    }
-    let frame_timeout_s = args.frame_timeout_s.or(file.frame_timeout_s).unwrap_or(3.0);
-    if !(frame_timeout_s.is_finite() && frame_timeout_s > 0.0) {
-        anyhow::bail!(
-            "frame_timeout_s must be a positive number of seconds, not {frame_timeout_s}"
-        );
-    }
-    let file_mount = Mount {
-        height_m: config.mount.height_m.unwrap_or(f64::NAN),
-        pitch_deg: config.mount.pitch_deg.unwrap_or(f64::NAN),
-        roll_deg: config.mount.roll_deg.unwrap_or(f64::NAN),
-    };
-    check_mount(&file_mount)
-        .map_err(|message| anyhow::anyhow!("in the config file's [mount]: {message}"))?;
-    let mount = args.mount.over(file_mount);
     Ok(Kinect2Options {
         device,
         pipeline,
-        gpu_device: args.gpu_device.or(file.gpu_device),
+        gpu_device: capture.gpu_device,
         depth,
-        color: !args.depth_only && file.color.unwrap_or(true),
-        mount,
+        color: capture.color,
+        mount: file.mount.mount(),
         wait_for_device: args.wait_for_device,
-        frame_timeout: Duration::from_secs_f64(frame_timeout_s),
+        frame_timeout: Duration::from_secs_f64(capture.frame_timeout_s),
         ..Kinect2Options::default()
     })
 }
@@ -353,6 +316,15 @@ fn counters(stats: &CaptureStats) -> SourceCounters {
 /// a status line a second, `STATUS=failed: ...` and `STOPPING=1` on the way
 /// out. Outside systemd the notifications go nowhere.
 pub fn run(args: &CaptureArgs, stop: &StopFlag) -> anyhow::Result<CaptureOutcome> {
+    if args.print_config {
+        let file = effective_config(args)?;
+        print!(
+            "{}",
+            file.to_toml()
+                .context("cannot write the settings as TOML")?
+        );
+        return Ok(CaptureOutcome::default());
+    }
     if args.list {
         list_devices()?;
         return Ok(CaptureOutcome::default());
@@ -371,11 +343,8 @@ fn capture(
     stop: &StopFlag,
     notifier: &SharedNotifier,
 ) -> anyhow::Result<CaptureOutcome> {
-    let config = match &args.config {
-        Some(path) => CaptureConfig::load(path)?,
-        None => CaptureConfig::default(),
-    };
-    let options = resolve_options(args, &config)?;
+    let file = effective_config(args)?;
+    let options = resolve_options(args, &file)?;
     tracing::info!(
         device = ?options.device,
         pipeline = %options.pipeline,
@@ -397,7 +366,7 @@ fn capture(
             ..CaptureOutcome::default()
         });
     };
-    let names = args.common.service_names();
+    let names = ServiceNames::new(file.service_prefix.clone());
     let node = create_node(&node_name("slope-capture"))?;
     let publisher = CloudPublisher::create(&node, &names, source.info(), args.max_points)
         .context("cannot publish clouds")?;
@@ -405,7 +374,7 @@ fn capture(
     notifier.borrow_mut().attach_health(HealthReporter::new(
         HealthComponent::Capture,
         Some(health),
-        DEFAULT_HEALTH_INTERVAL_S,
+        file.health.interval_s,
     ));
     tracing::info!(
         serial = source.serial(),
@@ -448,14 +417,21 @@ mod tests {
             .expect("valid arguments")
     }
 
+    /// The file's settings under the flags `args`.
+    fn resolved(file: &str, args: &[&str]) -> anyhow::Result<Kinect2Options> {
+        let mut file = SlopeFile::from_toml_str(file)?;
+        let args = parse(args);
+        apply_flags(&args, &mut file);
+        file.validate()?;
+        resolve_options(&args, &file)
+    }
+
     #[test]
     fn command_line_wins_over_the_config_file() {
-        let config: CaptureConfig = toml::from_str(
-            "[kinect2]\nserial = \"111\"\npipeline = \"cpu\"\nmax_depth_m = 6.0\ncolor = false\n\
-             [mount]\nheight_m = 0.4\npitch_deg = -15.0\n",
-        )
-        .expect("config");
-        let from_file = resolve_options(&parse(&[]), &config).expect("options");
+        let config =
+            "[capture]\nserial = \"111\"\npipeline = \"cpu\"\nmax_depth_m = 6.0\ncolor = false\n\
+             [mount]\nheight_m = 0.4\npitch_deg = -15.0\n";
+        let from_file = resolved(config, &[]).expect("options");
         assert_eq!(from_file.device, DeviceSelector::Serial("111".into()));
         assert_eq!(from_file.pipeline, Pipeline::Cpu);
         assert_eq!(from_file.depth.max_depth_m, 6.0);
@@ -468,24 +444,38 @@ mod tests {
         assert_eq!(from_file.mount.pitch_deg, -15.0);
         assert!(from_file.mount.roll_deg.is_nan());
 
-        let overridden = resolve_options(
-            &parse(&[
-                "--serial",
-                "222",
+        let overridden = resolved(
+            config,
+            &[
+                "--device-index",
+                "2",
                 "--pipeline",
                 "cl",
                 "--max-depth-m",
                 "4",
                 "--mount-pitch-deg",
                 "-20",
-            ]),
-            &config,
+            ],
         )
         .expect("options");
-        assert_eq!(overridden.device, DeviceSelector::Serial("222".into()));
+        assert_eq!(overridden.device, DeviceSelector::Index(2));
         assert_eq!(overridden.pipeline, Pipeline::OpenCl);
         assert_eq!(overridden.depth.max_depth_m, 4.0);
         assert_eq!(overridden.mount.pitch_deg, -20.0);
+    }
+
+    #[test]
+    fn the_file_defaults_are_libfreenect2s() {
+        let section = crate::config_file::CaptureSection::default();
+        let depth = DepthConfig::default();
+        assert_eq!(section.min_depth_m, f64::from(depth.min_depth_m));
+        assert_eq!(section.max_depth_m, f64::from(depth.max_depth_m));
+        assert_eq!(section.bilateral_filter, depth.bilateral_filter);
+        assert_eq!(section.edge_aware_filter, depth.edge_aware_filter);
+        assert_eq!(
+            section.frame_timeout_s,
+            Kinect2Options::default().frame_timeout.as_secs_f64()
+        );
     }
 
     #[test]
@@ -515,24 +505,14 @@ mod tests {
 
     #[test]
     fn bad_settings_are_refused() {
-        let bad_pipeline: CaptureConfig =
-            toml::from_str("[kinect2]\npipeline = \"vulkan\"\n").expect("config");
-        assert!(resolve_options(&parse(&[]), &bad_pipeline).is_err());
-        assert!(toml::from_str::<CaptureConfig>("[kinect2]\nserail = \"1\"\n").is_err());
-        let empty_range = parse(&["--min-depth-m", "3", "--max-depth-m", "2"]);
-        assert!(resolve_options(&empty_range, &CaptureConfig::default()).is_err());
-        let endless: CaptureConfig =
-            toml::from_str("[kinect2]\nmax_depth_m = inf\n").expect("config");
-        assert!(resolve_options(&parse(&[]), &endless).is_err());
-        let upside_down: CaptureConfig =
-            toml::from_str("[mount]\npitch_deg = 400.0\n").expect("config");
-        let message = resolve_options(&parse(&[]), &upside_down)
-            .expect_err("pitch 400")
-            .to_string();
-        assert!(
-            message.contains("[mount]") && message.contains("pitch"),
-            "{message}"
+        let empty_range = resolved("", &["--min-depth-m", "3", "--max-depth-m", "2"]);
+        let message = format!("{:#}", empty_range.expect_err("3 m .. 2 m"));
+        assert!(message.contains("capture.min_depth_m"), "{message}");
+        let message = format!(
+            "{:#}",
+            resolved("[mount]\npitch_deg = 400.0\n", &[]).expect_err("pitch 400")
         );
+        assert!(message.contains("mount.pitch_deg"), "{message}");
         assert!(CaptureArgs::try_parse_from(["slope-capture", "--mount-height-m", "-1"]).is_err());
         assert!(CaptureArgs::try_parse_from([
             "slope-capture",

@@ -8,21 +8,9 @@ use slope_ipc_types::{ServiceNames, DEFAULT_SERVICE_PREFIX, SERVICE_PREFIX_ENV};
 use slope_sensor::publish::StopFlag;
 use tracing_subscriber::EnvFilter;
 
-/// Flags every daemon and client takes.
-#[derive(Debug, Clone, Args)]
-pub struct CommonArgs {
-    /// Prefix of the iceoryx2 service names (`<prefix>/cloud`,
-    /// `<prefix>/estimate`). Processes talk to each other only when they
-    /// share it; tests use a unique one each.
-    #[arg(
-        long,
-        env = SERVICE_PREFIX_ENV,
-        default_value = DEFAULT_SERVICE_PREFIX,
-        global = true,
-        value_parser = prefix_arg
-    )]
-    pub service_prefix: String,
-
+/// `-v`/`-q`: every program takes them, with the same meaning.
+#[derive(Debug, Clone, Copy, Default, Args)]
+pub struct LogArgs {
     /// More log output (-v debug, -vv trace). RUST_LOG overrides.
     #[arg(short, long, action = clap::ArgAction::Count, global = true)]
     pub verbose: u8,
@@ -32,12 +20,9 @@ pub struct CommonArgs {
     pub quiet: bool,
 }
 
-impl CommonArgs {
-    pub fn service_names(&self) -> ServiceNames {
-        ServiceNames::new(self.service_prefix.clone())
-    }
-
-    /// Sets up `tracing` to stderr (stdout stays free for results).
+impl LogArgs {
+    /// Sets up `tracing` to stderr (stdout stays free for results), in
+    /// colour only when stderr is a terminal.
     pub fn init_logging(&self) {
         let level = match (self.quiet, self.verbose) {
             (true, _) => "error",
@@ -55,6 +40,55 @@ impl CommonArgs {
             .try_init();
         // iceoryx2 logs through its own logger; keep it to real problems.
         iceoryx2::prelude::set_log_level(iceoryx2::prelude::LogLevel::Error);
+    }
+}
+
+/// Flags every daemon and client takes.
+#[derive(Debug, Clone, Args)]
+pub struct CommonArgs {
+    /// Prefix of the iceoryx2 service names (`<prefix>/cloud`,
+    /// `<prefix>/estimate`). Processes talk to each other only when they
+    /// share it; tests use a unique one each. Default: `service_prefix` of
+    /// the config file for the programs that read one, else "slope".
+    #[arg(
+        long,
+        env = SERVICE_PREFIX_ENV,
+        global = true,
+        value_parser = prefix_arg
+    )]
+    pub service_prefix: Option<String>,
+
+    #[command(flatten)]
+    pub log: LogArgs,
+}
+
+impl CommonArgs {
+    /// The service names under `--service-prefix` (or its environment
+    /// variable), else the default prefix.
+    pub fn service_names(&self) -> ServiceNames {
+        ServiceNames::new(self.prefix_or(DEFAULT_SERVICE_PREFIX))
+    }
+
+    /// `--service-prefix` (or its environment variable), else `fallback`
+    /// (a config file's).
+    pub fn prefix_or(&self, fallback: &str) -> String {
+        self.service_prefix
+            .clone()
+            .unwrap_or_else(|| fallback.to_string())
+    }
+
+    pub fn init_logging(&self) {
+        self.log.init_logging();
+    }
+}
+
+/// `--max-frames` (and its likes): at least 1; no flag, no limit. The same
+/// rule in every program.
+pub fn max_frames_arg(text: &str) -> Result<u64, String> {
+    match text.parse::<u64>() {
+        Ok(0) => Err("must be at least 1 (leave the flag out for no limit)".to_string()),
+        Ok(n) => Ok(n),
+        Err(_) => Err(format!("'{text}' is not a whole number")),
     }
 }
 

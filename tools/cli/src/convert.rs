@@ -6,11 +6,11 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::Parser;
-use slope_ipc_types::{CloudPoint, SlopeEstimate, DEFAULT_SERVICE_PREFIX};
+use slope_ipc_types::{CloudPoint, SlopeEstimate};
 use slope_pipeline::{CloudView, Estimator, FrameInfo};
 use slope_sensor::recording::{DepthImage, Recording};
 
-use crate::cli::CommonArgs;
+use crate::cli::LogArgs;
 use crate::estimator::{load_config, method_arg};
 use crate::mcap_export::{McapExporter, McapFrame};
 
@@ -52,23 +52,13 @@ pub struct ConvertArgs {
     #[arg(long)]
     pub no_estimates: bool,
 
-    /// More log output (-v debug, -vv trace). RUST_LOG overrides.
-    #[arg(short, long, action = clap::ArgAction::Count)]
-    pub verbose: u8,
-
-    /// Less log output (errors only).
-    #[arg(short, long, conflicts_with = "verbose")]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub log: LogArgs,
 }
 
 impl ConvertArgs {
     pub fn init_logging(&self) {
-        CommonArgs {
-            service_prefix: DEFAULT_SERVICE_PREFIX.to_string(),
-            verbose: self.verbose,
-            quiet: self.quiet,
-        }
-        .init_logging();
+        self.log.init_logging();
     }
 }
 

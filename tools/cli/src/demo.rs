@@ -12,7 +12,9 @@ use anyhow::{bail, Context};
 use clap::Parser;
 use nix::sys::signal::{kill, Signal};
 use nix::unistd::Pid;
-use slope_ipc_types::{EstimateStatus, ServiceNames, SlopeEstimate, SlopeMethod};
+use slope_ipc_types::{
+    EstimateStatus, ServiceNames, SlopeEstimate, SlopeMethod, DEFAULT_SERVICE_PREFIX,
+};
 use slope_sensor::ipc::{create_node, EstimateSubscriber};
 use slope_sensor::publish::StopFlag;
 use slope_sensor::recording::Recording;
@@ -211,11 +213,19 @@ pub fn run(args: &DemoArgs, stop: &StopFlag) -> anyhow::Result<DemoSummary> {
     let estimator_bin = binary_path("slope-estimator")?;
     let replay_bin = binary_path("slope-replay")?;
 
-    let prefix = format!("{}-demo-{}", args.common.service_prefix, std::process::id());
+    let prefix = format!(
+        "{}-demo-{}",
+        args.common.prefix_or(DEFAULT_SERVICE_PREFIX),
+        std::process::id()
+    );
     let names = ServiceNames::new(prefix.clone());
     let node = create_node(&node_name("slope-demo"))?;
     let subscriber = EstimateSubscriber::create(&node, &names)?;
-    let child_log = if args.common.verbose > 0 { "-v" } else { "-q" };
+    let child_log = if args.common.log.verbose > 0 {
+        "-v"
+    } else {
+        "-q"
+    };
 
     println!(
         "slope-demo: {} ({frame_count} frames) -> slope-replay -> slope-estimator --method {} -> here",

@@ -11,13 +11,14 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Parser;
-use slope_ipc_types::{HealthComponent, SlopeEstimate, SlopeMethod};
+use slope_ipc_types::{HealthComponent, ServiceNames, SlopeEstimate, SlopeMethod};
 use slope_pipeline::{parse_method, CloudView, Estimator, EstimatorConfig, FrameInfo};
 use slope_sensor::ipc::{create_node, CloudSubscriber, EstimatePublisher, HealthPublisher};
 use slope_sensor::publish::StopFlag;
 
-use crate::cli::{node_name, wait_loop, CommonArgs, SilenceNote};
-use crate::health::{HealthReporter, DEFAULT_HEALTH_INTERVAL_S};
+use crate::cli::{max_frames_arg, node_name, wait_loop, CommonArgs, SilenceNote};
+use crate::config_file::{check_health_interval, config_path, SlopeFile, DEFAULT_CONFIG_PATH};
+use crate::health::HealthReporter;
 use crate::service_manager::ServiceManager;
 
 #[derive(Debug, Parser)]
@@ -30,11 +31,15 @@ estimator on the newest frame and publishes one SlopeEstimate per processed fram
 arrive while a frame is being processed are superseded by the newest one and counted as dropped. \
 Stops cleanly on SIGINT or SIGTERM.",
     after_help = "Examples:
-  slope-estimator                              # parameters from /etc/slope/slope.toml if it exists, else the defaults
+  slope-estimator                              # settings from /etc/slope/slope.toml if it exists, else the defaults
   slope-estimator --method tls                 # total-least-squares baseline
-  slope-estimator --config estimator.toml      # parameters from a TOML file
-  slope-estimator --config estimator.toml --print-config   # every parameter in effect, then exit
+  slope-estimator --config slope.toml          # settings from another file
+  slope-estimator --config slope.toml --print-config   # every setting in effect, then exit
   slope-estimator --service-prefix robot2 -v   # another stack, debug logs
+
+Config file: the one every slope daemon reads; this program takes service_prefix, [health] \
+and [estimator] (with [estimator.ransac] and the other stages' sections, see the pipeline \
+README) and checks the rest. Command-line flags win over the file.
 
 Health: a report on <prefix>/health every --health-interval-s seconds (frames in/out/dropped, \
 rates, capture-to-publish latency and per-stage median/p95/max ms over that interval, the last \
@@ -42,35 +47,35 @@ error); `slope-echo --health` shows it. The same summary over 10 s goes to the l
 )]
 pub struct EstimatorArgs {
     /// Fit used for the planes: paper (normals, cosine k-means, cumulative
-    /// averaging), least-squares, or tls. Overrides the config file.
+    /// averaging), least-squares, or tls. Overrides [estimator] method.
     #[arg(long, value_parser = method_arg)]
     pub method: Option<SlopeMethod>,
 
-    /// TOML file with estimator parameters (see the pipeline README);
-    /// missing keys keep the paper's defaults. Without it the estimator
-    /// reads /etc/slope/slope.toml if that exists.
-    #[arg(long)]
+    /// The slope config file (missing keys keep their defaults). Without
+    /// it the estimator reads /etc/slope/slope.toml if that exists.
+    #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
 
-    /// Stop after publishing this many estimates.
-    #[arg(long)]
+    /// Stop after publishing this many estimates (at least 1).
+    #[arg(long, value_parser = max_frames_arg)]
     pub max_frames: Option<u64>,
 
-    /// Print every parameter in effect (the config file's, the defaults for
-    /// keys it leaves out, and --method) as TOML and exit, without
-    /// connecting to anything: what the daemon would run with.
+    /// Print every setting in effect (the config file's, the defaults for
+    /// keys it leaves out, and the flags) as a config file and exit,
+    /// without connecting to anything: what the daemon would run with.
     #[arg(long)]
     pub print_config: bool,
 
     /// Seconds between health reports on the topic PREFIX/health (0: none, the
-    /// summary is still logged every 10 s).
+    /// summary is still logged every 10 s). Overrides [health] interval_s
+    /// (default 1).
     #[arg(
         long = "health-interval-s",
         alias = "health-interval",
-        default_value_t = DEFAULT_HEALTH_INTERVAL_S,
+        value_name = "S",
         value_parser = health_interval_arg
     )]
-    pub health_interval: f64,
+    pub health_interval: Option<f64>,
 
     #[command(flatten)]
     pub common: CommonArgs,
@@ -81,13 +86,7 @@ pub fn health_interval_arg(text: &str) -> Result<f64, String> {
     let value: f64 = text
         .parse()
         .map_err(|_| format!("'{text}' is not a number"))?;
-    if value == 0.0 || (0.05..=3600.0).contains(&value) {
-        Ok(value)
-    } else {
-        Err(format!(
-            "'{text}' must be 0 (no reports) or from 0.05 to 3600 seconds"
-        ))
-    }
+    check_health_interval(value).map_err(|range| format!("'{text}' {range}"))
 }
 
 pub fn method_arg(text: &str) -> Result<SlopeMethod, String> {
@@ -95,43 +94,39 @@ pub fn method_arg(text: &str) -> Result<SlopeMethod, String> {
         .ok_or_else(|| format!("unknown method '{text}': expected paper, least-squares or tls"))
 }
 
-/// The file the estimator reads when not given `--config`, if it exists
-/// (the Debian package installs it, every key commented out).
-pub const DEFAULT_CONFIG_PATH: &str = "/etc/slope/slope.toml";
-
-/// The config file to read: `given` (`--config`), else `default` if it
-/// exists. A `default` that cannot even be looked at (a directory without
-/// permission) is returned too, so that reading it fails with a message
-/// rather than the defaults being used silently.
-pub fn config_path(given: Option<&Path>, default: &Path) -> Option<PathBuf> {
-    match given {
-        Some(path) => Some(path.to_path_buf()),
-        None => match default.try_exists() {
-            Ok(false) => None,
-            Ok(true) | Err(_) => Some(default.to_path_buf()),
-        },
-    }
-}
-
-/// Reads the configuration file (if any) and applies command-line overrides.
+/// The estimator parameters of a config file (its `[estimator]`), or the
+/// defaults without one, with `method` over them: what slope-eval and
+/// slope-convert run.
 pub fn load_config(
     path: Option<&PathBuf>,
     method: Option<SlopeMethod>,
 ) -> anyhow::Result<EstimatorConfig> {
-    let mut config = match path {
-        Some(path) => {
-            let text = std::fs::read_to_string(path)
-                .with_context(|| format!("cannot read estimator config {}", path.display()))?;
-            EstimatorConfig::from_toml_str(&text)
-                .with_context(|| format!("invalid estimator config {}", path.display()))?
-        }
-        None => EstimatorConfig::default(),
-    };
+    let mut config = SlopeFile::load(path.map(PathBuf::as_path))?.estimator;
     if let Some(method) = method {
         config.method = method;
     }
-    config.validate().context("invalid estimator config")?;
     Ok(config)
+}
+
+/// The settings in effect: the config file (`--config`, else
+/// [`DEFAULT_CONFIG_PATH`] if it exists), else the defaults, with the
+/// command line over them.
+pub fn effective_config(args: &EstimatorArgs) -> anyhow::Result<SlopeFile> {
+    let path = config_path(args.config.as_deref(), Path::new(DEFAULT_CONFIG_PATH));
+    let mut file = SlopeFile::load(path.as_deref())?;
+    match &path {
+        Some(path) => tracing::info!(config = %path.display(), "settings loaded"),
+        None => tracing::info!("no {DEFAULT_CONFIG_PATH} and no --config: default settings"),
+    }
+    file.service_prefix = args.common.prefix_or(&file.service_prefix);
+    if let Some(method) = args.method {
+        file.estimator.method = method;
+    }
+    if let Some(interval) = args.health_interval {
+        file.health.interval_s = interval;
+    }
+    file.validate().context("invalid settings")?;
+    Ok(file)
 }
 
 /// What the estimator did.
@@ -141,27 +136,23 @@ pub struct EstimatorStats {
     pub dropped: u64,
 }
 
-/// The configuration as TOML, every key (a config file for the estimator).
-pub fn config_toml(config: &EstimatorConfig) -> anyhow::Result<String> {
-    toml::to_string(config).context("cannot write the configuration as TOML")
-}
-
 pub fn run(args: &EstimatorArgs, stop: &StopFlag) -> anyhow::Result<EstimatorStats> {
-    let path = config_path(args.config.as_deref(), Path::new(DEFAULT_CONFIG_PATH));
-    let config = load_config(path.as_ref(), args.method)?;
-    match &path {
-        Some(path) => tracing::info!(config = %path.display(), "estimator parameters loaded"),
-        None => tracing::info!("no {DEFAULT_CONFIG_PATH} and no --config: default parameters"),
-    }
+    let file = effective_config(args)?;
     if args.print_config {
-        print!("{}", config_toml(&config)?);
+        print!(
+            "{}",
+            file.to_toml()
+                .context("cannot write the settings as TOML")?
+        );
         return Ok(EstimatorStats::default());
     }
-    let names = args.common.service_names();
+    let config = file.estimator;
+    let health_interval_s = file.health.interval_s;
+    let names = ServiceNames::new(file.service_prefix);
     let node = create_node(&node_name("slope-estimator"))?;
     let subscriber = CloudSubscriber::create(&node, &names)?;
     let publisher = EstimatePublisher::create(&node, &names)?;
-    let health_publisher = if args.health_interval > 0.0 {
+    let health_publisher = if health_interval_s > 0.0 {
         Some(HealthPublisher::create(&node, &names)?)
     } else {
         None
@@ -183,7 +174,7 @@ pub fn run(args: &EstimatorArgs, stop: &StopFlag) -> anyhow::Result<EstimatorSta
         health: HealthReporter::new(
             HealthComponent::Estimator,
             health_publisher,
-            args.health_interval,
+            health_interval_s,
         ),
     };
     let mut silence = SilenceNote::new(
@@ -319,23 +310,49 @@ impl Worker<'_> {
 mod tests {
     use super::*;
 
+    fn parse(args: &[&str]) -> EstimatorArgs {
+        EstimatorArgs::try_parse_from(
+            std::iter::once("slope-estimator").chain(args.iter().copied()),
+        )
+        .expect("valid arguments")
+    }
+
     #[test]
-    fn without_config_the_default_file_is_read_when_it_exists() {
+    fn the_command_line_wins_over_the_file() {
         let dir = tempfile::tempdir().expect("temp dir");
-        let default = dir.path().join("slope.toml");
-        assert_eq!(config_path(None, &default), None);
+        let path = dir.path().join("slope.toml");
+        std::fs::write(
+            &path,
+            "service_prefix = \"robot2\"\n[health]\ninterval_s = 5.0\n\
+             [estimator]\nmethod = \"tls\"\nseed = 7\n",
+        )
+        .expect("write");
+        let file_arg = path.to_str().expect("utf-8");
+        let from_file = effective_config(&parse(&["--config", file_arg])).expect("valid");
+        assert_eq!(from_file.service_prefix, "robot2");
+        assert_eq!(from_file.health.interval_s, 5.0);
+        assert_eq!(from_file.estimator.method, SlopeMethod::Tls);
+        let overridden = effective_config(&parse(&[
+            "--config",
+            file_arg,
+            "--service-prefix",
+            "robot3",
+            "--health-interval-s",
+            "0",
+            "--method",
+            "paper",
+        ]))
+        .expect("valid");
+        assert_eq!(overridden.service_prefix, "robot3");
+        assert_eq!(overridden.health.interval_s, 0.0);
+        assert_eq!(overridden.estimator.method, SlopeMethod::Paper);
         assert_eq!(
-            load_config(config_path(None, &default).as_ref(), None).expect("defaults"),
-            EstimatorConfig::default()
+            overridden.estimator.seed, 7,
+            "what no flag sets stays the file's"
         );
-        std::fs::write(&default, "seed = 7\n[ransac]\nmax_planes = 12\n").expect("write");
-        assert_eq!(config_path(None, &default), Some(default.clone()));
-        let config = load_config(config_path(None, &default).as_ref(), None).expect("config");
-        assert_eq!((config.seed, config.ransac.max_planes), (7, 12));
-        // --config wins, and is read even when it does not exist (an error).
-        let given = dir.path().join("other.toml");
-        assert_eq!(config_path(Some(&given), &default), Some(given.clone()));
-        let err = load_config(Some(&given), None).expect_err("no such file");
-        assert!(format!("{err:#}").contains("other.toml"), "{err:#}");
+        let missing = dir.path().join("missing.toml");
+        let err = effective_config(&parse(&["--config", missing.to_str().expect("utf-8")]))
+            .expect_err("no such file");
+        assert!(format!("{err:#}").contains("missing.toml"), "{err:#}");
     }
 }

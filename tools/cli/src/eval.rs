@@ -34,7 +34,7 @@ use clap::Parser;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
-use slope_ipc_types::{CloudPoint, EstimateStatus, SlopeMethod, DEFAULT_SERVICE_PREFIX};
+use slope_ipc_types::{CloudPoint, EstimateStatus, SlopeMethod};
 use slope_pipeline::tracking::TrackedSlope;
 use slope_pipeline::{
     CloudView, Estimate, Estimator, EstimatorConfig, FrameInfo, PlaneEstimate, StageTimings,
@@ -43,7 +43,7 @@ use slope_sensor::recording::{DepthImage, FrameEntry, Recording};
 
 use slope_sensor::publish::StopFlag;
 
-use crate::cli::CommonArgs;
+use crate::cli::LogArgs;
 use crate::demo::median;
 use crate::estimator::{load_config, method_arg};
 use crate::eval_artifacts::{Artifacts, Snapshot};
@@ -153,24 +153,15 @@ pub struct EvalArgs {
     #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
 
-    /// More log output (-v debug, -vv trace). RUST_LOG overrides.
-    #[arg(short, long, action = clap::ArgAction::Count)]
-    pub verbose: u8,
-
-    /// Less log output (errors only) and no progress bar.
-    #[arg(short, long, conflicts_with = "verbose")]
-    pub quiet: bool,
+    /// -v/-q (-q also hides the progress bar).
+    #[command(flatten)]
+    pub log: LogArgs,
 }
 
 impl EvalArgs {
     /// Sets up `tracing` to stderr, as every slope program does.
     pub fn init_logging(&self) {
-        CommonArgs {
-            service_prefix: DEFAULT_SERVICE_PREFIX.to_string(),
-            verbose: self.verbose,
-            quiet: self.quiet,
-        }
-        .init_logging();
+        self.log.init_logging();
     }
 }
 
@@ -600,7 +591,7 @@ pub fn run(args: &EvalArgs, stop: &StopFlag) -> anyhow::Result<EvalOutcome> {
         recording.frames().len().min(max)
     };
     let total: usize = opened.iter().map(|(_, r)| frame_limit(r)).sum();
-    let bar = progress_bar(args.quiet, total * configs.len());
+    let bar = progress_bar(args.log.quiet, total * configs.len());
     let label_width = args
         .recordings
         .iter()

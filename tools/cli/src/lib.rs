@@ -6,6 +6,7 @@
 pub mod capture;
 pub mod capture_notify;
 pub mod cli;
+pub mod config_file;
 pub mod convert;
 pub mod demo;
 pub mod echo;

@@ -1,18 +1,19 @@
 //! `slope-replay`: publishes a recording's frames as clouds, standing in for
 //! the camera.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use anyhow::Context;
 use clap::Parser;
-use slope_ipc_types::DEFAULT_MAX_CLOUD_POINTS;
+use slope_ipc_types::{ServiceNames, DEFAULT_MAX_CLOUD_POINTS};
 use slope_sensor::ipc::{create_node, CloudPublisher};
 use slope_sensor::publish::{publish_stream, Pacing, PublishOptions, PublishStats, StopFlag};
 use slope_sensor::recording::Recording;
 use slope_sensor::source::{FrameSource, RecordingSource};
 
-use crate::cli::{node_name, CommonArgs};
+use crate::cli::{max_frames_arg, node_name, CommonArgs};
+use crate::config_file::{config_path, SlopeFile, DEFAULT_CONFIG_PATH};
 
 #[derive(Debug, Parser)]
 #[command(
@@ -26,7 +27,8 @@ exactly as slope-capture does with the Kinect. By default frames go out at the r
   slope-replay tests/recordings/ramp16                 # recorded rate, once
   slope-replay tests/recordings/ramp16 --loop          # forever, until Ctrl-C
   slope-replay REC --rate 5 --wait-subscribers 1       # 5 Hz, start when the estimator is up
-  slope-replay REC --speed 0.5 --max-frames 10         # half speed, first 10 frames"
+  slope-replay REC --speed 0.5 --max-frames 10         # half speed, first 10 frames
+  slope-replay REC --config slope.toml                 # on the service prefix of that file"
 )]
 pub struct ReplayArgs {
     /// The recording directory (holds recording.toml and frames.csv).
@@ -44,9 +46,15 @@ pub struct ReplayArgs {
     #[arg(long = "loop")]
     pub looping: bool,
 
-    /// Stop after this many frames.
-    #[arg(long)]
+    /// Stop after this many frames (at least 1).
+    #[arg(long, value_parser = max_frames_arg)]
     pub max_frames: Option<u64>,
+
+    /// The slope config file, for its service_prefix (the rest is checked,
+    /// not used: the recording carries its own mount). Without it replay
+    /// reads /etc/slope/slope.toml if that exists.
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
 
     /// Start only when this many subscribers are connected to the cloud
     /// topic, so that nothing is lost (0-6: the topic takes at most 6).
@@ -106,7 +114,7 @@ pub fn run(args: &ReplayArgs, stop: &StopFlag) -> anyhow::Result<PublishStats> {
         );
     }
     let mut source = RecordingSource::new(recording, args.looping);
-    let names = args.common.service_names();
+    let names = service_names(args)?;
     let node = create_node(&node_name("slope-replay"))?;
     let publisher = CloudPublisher::create(&node, &names, source.info(), args.max_points)?;
     let info = source.info();
@@ -141,6 +149,15 @@ pub fn run(args: &ReplayArgs, stop: &StopFlag) -> anyhow::Result<PublishStats> {
         "replay finished"
     );
     Ok(stats)
+}
+
+/// The service names: `--service-prefix`, else the config file's.
+fn service_names(args: &ReplayArgs) -> anyhow::Result<ServiceNames> {
+    let path = config_path(args.config.as_deref(), Path::new(DEFAULT_CONFIG_PATH));
+    let file = SlopeFile::load(path.as_deref())?;
+    Ok(ServiceNames::new(
+        args.common.prefix_or(&file.service_prefix),
+    ))
 }
 
 /// `--wait-subscribers`: at most the cloud topic's subscriber limit.

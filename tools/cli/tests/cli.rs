@@ -110,39 +110,69 @@ fn user_errors_are_printed_once_without_a_backtrace() {
     }
 }
 
-/// `--print-config` prints the parameters in effect (file, defaults for the
-/// keys it leaves out, --method), which parse back to the same
+/// `--print-config` prints the settings in effect (file, defaults for the
+/// keys it leaves out, the flags), which parse back to the same
 /// configuration; a bad file is refused naming the key.
 #[test]
 fn the_estimator_prints_the_configuration_in_effect() {
+    use slope_tools::config_file::SlopeFile;
     let dir = tempfile::tempdir().expect("temp dir");
-    let file = dir.path().join("estimator.toml");
-    std::fs::write(&file, "seed = 7\n[ransac]\nmax_planes = 12\n").expect("write");
+    let file = dir.path().join("slope.toml");
+    std::fs::write(
+        &file,
+        "service_prefix = \"robot2\"\n[mount]\nheight_m = 0.5\n\
+         [estimator]\nseed = 7\n[estimator.ransac]\nmax_planes = 12\n",
+    )
+    .expect("write");
     let bin = env!("CARGO_BIN_EXE_slope-estimator");
     let path = file.to_str().expect("utf-8 path");
     let (ok, stdout, stderr) = run(
         bin,
-        &["--config", path, "--method", "tls", "--print-config"],
+        &[
+            "--config",
+            path,
+            "--method",
+            "tls",
+            "--health-interval-s",
+            "0",
+            "--print-config",
+        ],
     );
     assert!(ok, "{stderr}");
-    let printed = slope_pipeline::EstimatorConfig::from_toml_str(&stdout)
-        .unwrap_or_else(|e| panic!("{e}\n{stdout}"));
-    let expected = slope_pipeline::EstimatorConfig {
-        seed: 7,
-        method: slope_ipc_types::SlopeMethod::Tls,
-        ransac: slope_pipeline::RansacConfig {
-            max_planes: 12,
-            ..Default::default()
-        },
-        ..Default::default()
+    let printed = SlopeFile::from_toml_str(&stdout).unwrap_or_else(|e| panic!("{e}\n{stdout}"));
+    let mut expected = SlopeFile {
+        service_prefix: "robot2".into(),
+        ..SlopeFile::default()
     };
+    expected.mount.height_m = Some(0.5);
+    expected.health.interval_s = 0.0;
+    expected.estimator.seed = 7;
+    expected.estimator.method = slope_ipc_types::SlopeMethod::Tls;
+    expected.estimator.ransac.max_planes = 12;
     assert_eq!(printed, expected);
     assert!(
-        stdout.contains("[normals]"),
+        stdout.contains("[estimator.normals]") && stdout.contains("[capture]"),
         "every section is printed:\n{stdout}"
     );
-    std::fs::write(&file, "[ransac]\nmax_planez = 12\n").expect("write");
-    let (ok, _, stderr) = run(bin, &["--config", path, "--print-config"]);
-    assert!(!ok);
-    assert!(stderr.contains("max_planez"), "{stderr}");
+    assert!(
+        !stderr.contains('\u{1b}'),
+        "no colour off a terminal: {stderr}"
+    );
+    for (text, named) in [
+        (
+            "[estimator.ransac]\nmax_planez = 12\n",
+            "`estimator.ransac.max_planez` (line 2): unknown field",
+        ),
+        (
+            "[mount]\npitch_deg = -95.0\n",
+            "`mount.pitch_deg` = -95: the mount pitch (degrees) must be at least -90 and at most 90",
+        ),
+        ("seed = 7\n", "move `seed` under [estimator]"),
+    ] {
+        std::fs::write(&file, text).expect("write");
+        let (ok, _, stderr) = run(bin, &["--config", path, "--print-config"]);
+        assert!(!ok, "{text} accepted");
+        assert!(stderr.contains(named), "{text}: {stderr}");
+        assert!(stderr.contains(path), "the file is named: {stderr}");
+    }
 }

@@ -1,12 +1,13 @@
 //! The conffile the Debian package installs as `/etc/slope/slope.toml`
-//! (`packaging/slope.toml`) cannot drift from the estimator: as shipped it
-//! parses to the defaults; with every `# key = value` line uncommented it is
-//! `slope-estimator --print-config` of the defaults, key for key and value
-//! for value; and the range each comment starts with is the one the
-//! estimator enforces (a value at each bound is accepted, one beyond it
-//! refused).
+//! (`packaging/slope.toml`) cannot drift from the daemons: as shipped it
+//! parses to the defaults; with every `# key = value` line uncommented
+//! (except the keys marked "no default") it is `--print-config` of the
+//! defaults, key for key and value for value, in every section; and the
+//! range each comment starts with is the one the daemons enforce (a value at
+//! each bound is accepted, one beyond it refused; an example value of a key
+//! without a default is accepted).
 
-use slope_pipeline::EstimatorConfig;
+use slope_tools::config_file::SlopeFile;
 
 const CONFFILE: &str = include_str!("../../../packaging/slope.toml");
 
@@ -24,23 +25,42 @@ fn commented_key(line: &str) -> Option<(&str, &str, &str)> {
     Some((key, value.trim(), comment.trim()))
 }
 
-/// The `# key = value   # comment` lines made live; other lines unchanged.
+/// The `# key = value   # comment` lines made live (but those of keys
+/// without a default); other lines unchanged.
 fn uncommented(text: &str) -> String {
     text.lines()
         .map(|line| match commented_key(line) {
-            Some((key, value, _)) => format!("{key} = {value}"),
-            None => line.to_string(),
+            Some((key, value, comment)) if !comment.contains("no default") => {
+                format!("{key} = {value}")
+            }
+            _ => line.to_string(),
         })
         .collect::<Vec<_>>()
         .join("\n")
 }
 
 /// How the uncommented file differs from `--print-config` of the defaults.
+/// Every key of `table` with its full path (`estimator.ransac.max_planes`).
+fn sections(table: &toml::Table) -> Vec<(String, toml::Value)> {
+    let mut keys = Vec::new();
+    for (key, value) in table {
+        match value.as_table() {
+            Some(inner) => keys.extend(
+                sections(inner)
+                    .into_iter()
+                    .map(|(k, v)| (format!("{key}.{k}"), v)),
+            ),
+            None => keys.push((key.clone(), value.clone())),
+        }
+    }
+    keys
+}
+
 fn differences_from_defaults(text: &str) -> Vec<String> {
     let live = uncommented(text);
     let mut found = Vec::new();
-    match EstimatorConfig::from_toml_str(&live) {
-        Ok(parsed) if parsed == EstimatorConfig::default() => {}
+    match SlopeFile::from_toml_str(&live) {
+        Ok(parsed) if parsed == SlopeFile::default() => {}
         Ok(parsed) => found.push(format!("parses to {parsed:?}")),
         Err(err) => found.push(format!("does not parse: {err:?}")),
     }
@@ -48,21 +68,10 @@ fn differences_from_defaults(text: &str) -> Vec<String> {
         Ok(table) => table,
         Err(err) => return vec![format!("not TOML: {err}")],
     };
-    let printed = slope_tools::estimator::config_toml(&EstimatorConfig::default())
+    let printed = SlopeFile::default()
+        .to_toml()
         .expect("the defaults serialise");
     let defaults: toml::Table = toml::from_str(&printed).expect("--print-config is TOML");
-    let sections = |t: &toml::Table| {
-        let mut keys = Vec::new();
-        for (key, value) in t {
-            match value.as_table() {
-                Some(inner) => {
-                    keys.extend(inner.iter().map(|(k, v)| (format!("{key}.{k}"), v.clone())))
-                }
-                None => keys.push((key.clone(), value.clone())),
-            }
-        }
-        keys
-    };
     let (in_file, in_defaults) = (sections(&file), sections(&defaults));
     for (key, value) in &in_defaults {
         match in_file.iter().find(|(k, _)| k == key) {
@@ -75,7 +84,7 @@ fn differences_from_defaults(text: &str) -> Vec<String> {
     }
     for (key, _) in &in_file {
         if !in_defaults.iter().any(|(k, _)| k == key) {
-            found.push(format!("{key} is not a key of the estimator"));
+            found.push(format!("{key} is not a key of the config file"));
         }
     }
     found
@@ -83,8 +92,8 @@ fn differences_from_defaults(text: &str) -> Vec<String> {
 
 #[test]
 fn the_shipped_conffile_parses_to_the_defaults() {
-    let parsed = EstimatorConfig::from_toml_str(CONFFILE).expect("the conffile parses");
-    assert_eq!(parsed, EstimatorConfig::default());
+    let parsed = SlopeFile::from_toml_str(CONFFILE).expect("the conffile parses");
+    assert_eq!(parsed, SlopeFile::default());
 }
 
 #[test]
@@ -112,20 +121,21 @@ fn documented_keys(text: &str) -> Vec<(String, String, String, String)> {
     keys
 }
 
-/// Whether the estimator takes `key = value` (in `[section]`).
+/// Whether the daemons take `key = value` (in `[section]`).
 fn accepts(section: &str, key: &str, value: &str) -> bool {
     let text = if section.is_empty() {
         format!("{key} = {value}\n")
     } else {
         format!("[{section}]\n{key} = {value}\n")
     };
-    EstimatorConfig::from_toml_str(&text).is_ok()
+    SlopeFile::from_toml_str(&text).is_ok()
 }
 
-/// Where a documented range and the estimator disagree. Ranges are
+/// Where a documented range and the daemons disagree. Ranges are
 /// intervals `[a, b]`, `(a, b)`, `[a, b)`, `(a, b]` (a bound may name
-/// another key, which is not checked here), `>= a`, `> a`, or the
-/// alternatives `x | y | z`.
+/// another key, which is not checked here), `>= a`, `> a`, the
+/// alternatives `x | y | z`, or `any`. The example value itself is always
+/// accepted.
 fn range_disagreements(section: &str, key: &str, default: &str, range: &str) -> Vec<String> {
     let float = default.contains('.');
     // A step that changes a value of this type at these magnitudes.
@@ -144,7 +154,7 @@ fn range_disagreements(section: &str, key: &str, default: &str, range: &str) -> 
     };
     let number = |text: &str| text.trim().parse::<f64>().ok();
     // (value, whether the range says it is accepted)
-    let mut probes: Vec<(String, bool)> = Vec::new();
+    let mut probes: Vec<(String, bool)> = vec![(default.to_string(), true)];
     let mut found = Vec::new();
     // The value at a bound and the one beyond it.
     let bound = |b: f64, inclusive: bool, outward: f64| {
@@ -155,7 +165,8 @@ fn range_disagreements(section: &str, key: &str, default: &str, range: &str) -> 
             [(write(b - outward * step), true), (write(b), false)]
         }
     };
-    if let Some(a) = range.strip_prefix(">=").and_then(number) {
+    if range == "any" {
+    } else if let Some(a) = range.strip_prefix(">=").and_then(number) {
         probes.extend(bound(a, true, -1.0));
     } else if let Some(a) = range.strip_prefix('>').and_then(number) {
         probes.extend(bound(a, false, -1.0));
@@ -202,7 +213,7 @@ fn interval(range: &str) -> Option<(char, char, &str, &str)> {
 }
 
 #[test]
-fn every_key_states_the_range_the_estimator_enforces() {
+fn every_key_states_the_range_the_daemons_enforce() {
     let keys = documented_keys(CONFFILE);
     assert!(keys.len() > 40, "{keys:?}");
     let mut found = Vec::new();
@@ -221,35 +232,56 @@ fn the_checks_catch_a_drifted_conffile() {
     let found = differences_from_defaults(&wrong_default);
     assert_eq!(found.len(), 2, "{found:?}");
     assert!(found[0].starts_with("parses to"), "{found:?}");
-    assert_eq!(found[1], "outlier.neighbours = 21, the default is 20");
+    assert_eq!(
+        found[1],
+        "estimator.outlier.neighbours = 21, the default is 20"
+    );
     let missing = CONFFILE.replace("# max_missed = 30 ", "# ");
     assert_eq!(
         differences_from_defaults(&missing),
-        ["tracking.max_missed is missing"]
+        ["estimator.tracking.max_missed is missing"]
     );
     let unknown = CONFFILE.replace("# max_missed = 30 ", "# max_misses = 30 ");
     let found = differences_from_defaults(&unknown);
     assert!(found[0].starts_with("does not parse"), "{found:?}");
     assert!(
-        found.contains(&"tracking.max_missed is missing".to_string()),
+        found.contains(&"estimator.tracking.max_missed is missing".to_string()),
         "{found:?}"
     );
     assert!(
-        found.contains(&"tracking.max_misses is not a key of the estimator".to_string()),
+        found
+            .contains(&"estimator.tracking.max_misses is not a key of the config file".to_string()),
         "{found:?}"
     );
     assert_eq!(
-        range_disagreements("outlier", "neighbours", "20", "[1, 47]"),
-        ["outlier.neighbours = 48 is accepted, the conffile says [1, 47]"]
+        range_disagreements("estimator.outlier", "neighbours", "20", "[1, 47]"),
+        ["estimator.outlier.neighbours = 48 is accepted, the conffile says [1, 47]"]
     );
     assert_eq!(
-        range_disagreements("ransac", "confidence", "0.999", "[0, 1)").len(),
+        range_disagreements("estimator.ransac", "confidence", "0.999", "[0, 1)").len(),
         1,
         "0 is refused"
     );
     assert_eq!(
-        range_disagreements("", "method", "\"paper\"", "\"paper\" | \"fast\"").len(),
+        range_disagreements("estimator", "method", "\"paper\"", "\"paper\" | \"fast\"").len(),
         1
     );
-    assert_eq!(range_disagreements("", "seed", "0", "seed").len(), 1);
+    assert_eq!(
+        range_disagreements("estimator", "seed", "0", "seed").len(),
+        1
+    );
+    // The sections of the other daemons are checked as well.
+    assert_eq!(
+        range_disagreements("mount", "pitch_deg", "-20.0", "[-80, 90]"),
+        ["mount.pitch_deg = -80.000001 is accepted, the conffile says [-80, 90]"]
+    );
+    assert_eq!(
+        range_disagreements("capture", "serail", "\"1\"", "any"),
+        ["capture.serail = \"1\" is refused, the conffile says any"]
+    );
+    let wrong_health = CONFFILE.replace("# interval_s = 1.0 ", "# interval_s = 2.0 ");
+    assert_eq!(
+        differences_from_defaults(&wrong_health)[1],
+        "health.interval_s = 2.0, the default is 1.0"
+    );
 }
