@@ -305,7 +305,7 @@ fn main() {
             }
         }
         eprintln!(
-            "{name}: sim {:.2}/{:.2}, real {:.2}/{:.2}",
+            "{name}: sim {:.3}/{:.3}, real {:.3}/{:.3}",
             sim.mean(),
             sim.worst(),
             real.mean(),
