@@ -2,21 +2,24 @@
 //! `validate` names its own keys, [`crate::config::EstimatorConfig`] puts the
 //! section in front (`ransac.` + `confidence`).
 
+use std::borrow::Cow;
+
 /// A configuration value out of its range: the key, the value and the range.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("`{key}` = {value}: {reason}")]
 pub struct InvalidValue {
     pub key: String,
     pub value: String,
-    pub reason: &'static str,
+    /// The range the value must be in (`must be at least 3`).
+    pub reason: Cow<'static, str>,
 }
 
 impl InvalidValue {
-    pub fn new(key: &str, value: impl ToString, reason: &'static str) -> Self {
+    pub fn new(key: &str, value: impl ToString, reason: impl Into<Cow<'static, str>>) -> Self {
         Self {
             key: key.to_owned(),
             value: value.to_string(),
-            reason,
+            reason: reason.into(),
         }
     }
 
@@ -69,12 +72,7 @@ pub fn fraction(key: &str, v: f64) -> Result<(), InvalidValue> {
 
 /// A count of at least `min`.
 pub fn at_least(key: &str, v: usize, min: usize) -> Result<(), InvalidValue> {
-    let reason = if min == 1 {
-        "must be at least 1"
-    } else {
-        "is too small"
-    };
-    check(v >= min, key, v, reason)
+    check(v >= min, key, v, format!("must be at least {min}"))
 }
 
 /// `Ok` when `ok`, else the error for `key` = `v`.
@@ -82,7 +80,7 @@ pub fn check(
     ok: bool,
     key: &str,
     v: impl ToString,
-    reason: &'static str,
+    reason: impl Into<Cow<'static, str>>,
 ) -> Result<(), InvalidValue> {
     if ok {
         Ok(())
@@ -105,6 +103,9 @@ mod tests {
         assert!(non_negative("x", 0.0).is_ok());
         assert!(angle("x", 180.5).is_err());
         assert!(fraction("x", 1.0).is_ok());
-        assert!(at_least("x", 2, 3).is_err());
+        assert_eq!(
+            at_least("neighbours", 2, 3).unwrap_err().to_string(),
+            "`neighbours` = 2: must be at least 3"
+        );
     }
 }

@@ -179,3 +179,18 @@ pub fn run(args: &BridgeArgs, stop: &StopFlag) -> anyhow::Result<BridgeStats> {
     );
     Ok(stats)
 }
+
+#[cfg(test)]
+mod tests {
+    use clap::CommandFactory;
+
+    use super::BridgeArgs;
+
+    /// slope-bridge speaks with the voice of every slope program
+    /// (`slope_tools::flag_rules`).
+    #[test]
+    fn the_bridge_follows_the_flag_rules() {
+        let found = slope_tools::flag_rules::violations(&BridgeArgs::command());
+        assert!(found.is_empty(), "{}", found.join("\n"));
+    }
+}

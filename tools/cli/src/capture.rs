@@ -76,7 +76,7 @@ pub struct CaptureArgs {
     pub print_config: bool,
 
     /// Seconds between health reports on the topic PREFIX/health (0: none).
-    /// Overrides [health] interval_s (default 1).
+    /// Overrides `[health] interval_s` (default 1).
     #[arg(long = "health-interval-s", value_name = "S", value_parser = health_interval_arg)]
     pub health_interval: Option<f64>,
 

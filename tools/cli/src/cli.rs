@@ -82,11 +82,14 @@ impl CommonArgs {
     }
 }
 
+/// What `--max-frames 0` (and `--count 0`) answers, in every program.
+pub const MAX_FRAMES_ZERO: &str = "must be at least 1 (leave the flag out for no limit)";
+
 /// `--max-frames` (and its likes): at least 1; no flag, no limit. The same
 /// rule in every program.
 pub fn max_frames_arg(text: &str) -> Result<u64, String> {
     match text.parse::<u64>() {
-        Ok(0) => Err("must be at least 1 (leave the flag out for no limit)".to_string()),
+        Ok(0) => Err(MAX_FRAMES_ZERO.to_string()),
         Ok(n) => Ok(n),
         Err(_) => Err(format!("'{text}' is not a whole number")),
     }

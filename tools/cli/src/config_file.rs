@@ -564,6 +564,11 @@ mod tests {
                 "no leading or trailing",
             ),
             (
+                "[estimator.normals]\nneighbours = 2\n",
+                "`estimator.normals.neighbours` = 2",
+                "must be at least 3",
+            ),
+            (
                 "[estimator.ransac]\nconfidence = 1.5\n",
                 "`estimator.ransac.confidence` = 1.5",
                 "0",

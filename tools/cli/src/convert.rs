@@ -2,7 +2,7 @@
 //! Foxglove opens: per frame the depth image, the cloud and the estimate
 //! (the estimator run in this process, as `slope-eval` does).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use clap::Parser;
@@ -10,12 +10,13 @@ use slope_ipc_types::{CloudPoint, SlopeEstimate};
 use slope_pipeline::{CloudView, Estimator, FrameInfo};
 use slope_sensor::recording::{DepthImage, Recording};
 
-use crate::cli::LogArgs;
+use crate::cli::{max_frames_arg, LogArgs};
 use crate::estimator::{load_config, method_arg};
 use crate::mcap_export::{McapExporter, McapFrame};
 
 #[derive(Debug, Parser)]
 #[command(
+    group = clap::ArgGroup::new("out").required(true).args(["output", "output_positional"]),
     name = "slope-convert",
     version,
     about = "Convert a recording into an MCAP file (Foxglove, ROS 2 tooling): depth, cloud, estimates",
@@ -25,16 +26,21 @@ z float32 and rgb) and the slope estimate (/slope/estimate, JSON with schema \
 slope.estimate.json/1: the keys of slope-echo --json), every channel JSON with a JSON Schema. \
 The estimates come from the estimator run here on each frame (--no-estimates leaves them out).",
     after_help = "Examples:
-  slope-convert tests/recordings/ramp16 ramp16.mcap        # then open ramp16.mcap in Foxglove
-  slope-convert REC out.mcap --method tls --max-frames 10
-  slope-convert REC out.mcap --no-estimates               # depth and cloud only"
+  slope-convert tests/recordings/ramp16 -o ramp16.mcap     # then open ramp16.mcap in Foxglove
+  slope-convert REC -o out.mcap --method tls --max-frames 10
+  slope-convert REC -o out.mcap --no-estimates            # depth and cloud only"
 )]
 pub struct ConvertArgs {
     /// The recording directory (holds recording.toml and frames.csv).
     pub recording: PathBuf,
 
     /// The MCAP file to write (replaced if it exists).
-    pub output: PathBuf,
+    #[arg(short = 'o', long = "output", value_name = "FILE")]
+    pub output: Option<PathBuf>,
+
+    /// The same as -o (given without the flag).
+    #[arg(value_name = "OUTPUT", hide = true, conflicts_with = "output")]
+    pub output_positional: Option<PathBuf>,
 
     /// Fit used for the estimates: paper, least-squares or tls.
     #[arg(long, value_parser = method_arg)]
@@ -45,7 +51,7 @@ pub struct ConvertArgs {
     pub config: Option<PathBuf>,
 
     /// Convert at most this many frames (the first ones).
-    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    #[arg(long, value_parser = max_frames_arg)]
     pub max_frames: Option<u64>,
 
     /// Leave the estimates out (depth and cloud only).
@@ -57,6 +63,15 @@ pub struct ConvertArgs {
 }
 
 impl ConvertArgs {
+    /// `-o FILE` (or FILE without the flag).
+    pub fn output(&self) -> &Path {
+        match (&self.output, &self.output_positional) {
+            (Some(path), _) | (None, Some(path)) => path,
+            // Unreachable: the group `out` requires one of the two.
+            (None, None) => Path::new(""),
+        }
+    }
+
     pub fn init_logging(&self) {
         self.log.init_logging();
     }
@@ -82,7 +97,7 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<ConvertStats> {
     let projector = recording.projector();
     let mut depth = DepthImage::default();
     let mut points = vec![CloudPoint::INVALID; projector.len()];
-    let mut exporter = McapExporter::create(&args.output)?;
+    let mut exporter = McapExporter::create(args.output())?;
     let limit = args.max_frames.map_or(usize::MAX, |m| m as usize);
     let mut stats = ConvertStats::default();
     for frame in recording.frames().iter().take(limit) {
@@ -127,7 +142,7 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<ConvertStats> {
     }
     exporter.finish()?;
     tracing::info!(
-        output = %args.output.display(),
+        output = %args.output().display(),
         frames = stats.frames,
         estimates = stats.estimates,
         bad_frames = stats.bad_frames,

@@ -9,7 +9,7 @@ use slope_ipc_types::{EstimateStatus, Health, SlopeEstimate, TimingStats};
 use slope_sensor::ipc::{create_node, EstimateSubscriber, HealthSubscriber, TopicListener};
 use slope_sensor::publish::StopFlag;
 
-use crate::cli::{node_name, wait_loop, CommonArgs, SilenceNote};
+use crate::cli::{max_frames_arg, node_name, wait_loop, CommonArgs, SilenceNote};
 use crate::health::summary_line;
 use crate::replay::positive_f64;
 
@@ -51,8 +51,8 @@ pub struct EchoArgs {
     #[arg(long)]
     pub health: bool,
 
-    /// Exit (status 0) after this many estimates.
-    #[arg(long)]
+    /// Exit (status 0) after this many messages (at least 1).
+    #[arg(long, value_parser = max_frames_arg)]
     pub count: Option<u64>,
 
     /// Exit after this many seconds: status 0 when no --count was given,

@@ -47,7 +47,7 @@ error); `slope-echo --health` shows it. The same summary over 10 s goes to the l
 )]
 pub struct EstimatorArgs {
     /// Fit used for the planes: paper (normals, cosine k-means, cumulative
-    /// averaging), least-squares, or tls. Overrides [estimator] method.
+    /// averaging), least-squares, or tls. Overrides `[estimator] method`.
     #[arg(long, value_parser = method_arg)]
     pub method: Option<SlopeMethod>,
 
@@ -67,7 +67,7 @@ pub struct EstimatorArgs {
     pub print_config: bool,
 
     /// Seconds between health reports on the topic PREFIX/health (0: none, the
-    /// summary is still logged every 10 s). Overrides [health] interval_s
+    /// summary is still logged every 10 s). Overrides `[health] interval_s`
     /// (default 1).
     #[arg(
         long = "health-interval-s",

@@ -43,7 +43,7 @@ use slope_sensor::recording::{DepthImage, FrameEntry, Recording};
 
 use slope_sensor::publish::StopFlag;
 
-use crate::cli::LogArgs;
+use crate::cli::{max_frames_arg, LogArgs};
 use crate::demo::median;
 use crate::estimator::{load_config, method_arg};
 use crate::eval_artifacts::{Artifacts, Snapshot};
@@ -118,7 +118,7 @@ pub struct EvalArgs {
     pub preset: Option<String>,
 
     /// Evaluate at most this many frames of each recording (the first ones).
-    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    #[arg(long, value_parser = max_frames_arg)]
     pub max_frames: Option<u64>,
 
     /// Print one JSON object per recording and method, one per line, instead

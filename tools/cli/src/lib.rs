@@ -13,6 +13,7 @@ pub mod echo;
 pub mod estimator;
 pub mod eval;
 pub mod eval_artifacts;
+pub mod flag_rules;
 pub mod health;
 pub mod mcap_export;
 pub mod mount_args;

@@ -24,7 +24,7 @@ use slope_sensor::recording::{
 };
 use slope_sensor::source::{FrameSource, SourceFrame, SourceInfo};
 
-use crate::cli::{node_name, CommonArgs};
+use crate::cli::{max_frames_arg, node_name, CommonArgs};
 use crate::mcap_export::{McapExporter, McapFrame};
 use crate::mount_args::MountArgs;
 use crate::replay::positive_f64;
@@ -78,25 +78,31 @@ impl From<Compression> for PngCompression {
 
 #[derive(Debug, Parser)]
 #[command(
+    group = clap::ArgGroup::new("out").required(true).args(["output", "output_positional"]),
     name = "slope-record",
     version,
     about = "Record depth (and colour) frames into a recording that slope-replay can play",
-    long_about = "Writes OUT_DIR in the recording format (recording.toml, frames.csv, depth/*.png, \
+    long_about = "Writes the -o directory in the recording format (recording.toml, frames.csv, depth/*.png, \
 color/*.png) from the cloud topic of a running source, or straight from the Kinect v2. Every row \
 is flushed as soon as its images are written, so a recording cut short stays readable. Stops at \
 --max-frames, --duration-s, when the topic goes quiet for --idle-timeout-s, or on Ctrl-C.",
     after_help = "Examples:
-  slope-record scene1                                  # from the running slope-capture, until Ctrl-C
-  slope-record scene1 --max-frames 300                 # ten seconds of a 30 Hz camera
-  slope-record scene1 --source kinect --mount-pitch-deg -20 --mount-height-m 0.5
+  slope-record -o scene1                               # from the running slope-capture, until Ctrl-C
+  slope-record -o scene1 --max-frames 300              # ten seconds of a 30 Hz camera
+  slope-record -o scene1 --source kinect --mount-pitch-deg -20 --mount-height-m 0.5
   slope-replay scene1                                  # ... and play it back later
-  slope-record copy --idle-timeout-s 2 & slope-replay REC --wait-subscribers 1
-  slope-record run.mcap --format mcap --max-frames 300  # for Foxglove, with the estimates"
+  slope-record -o copy --idle-timeout-s 2 & slope-replay REC --wait-subscribers 1
+  slope-record -o run.mcap --format mcap --max-frames 300  # for Foxglove, with the estimates"
 )]
 pub struct RecordArgs {
     /// The recording directory to create (must not exist, or be empty); with
     /// --format mcap, the MCAP file to create (must not exist).
-    pub out_dir: PathBuf,
+    #[arg(short = 'o', long = "output", value_name = "PATH")]
+    pub output: Option<PathBuf>,
+
+    /// The same as -o (given without the flag).
+    #[arg(value_name = "OUTPUT", hide = true, conflicts_with = "output")]
+    pub output_positional: Option<PathBuf>,
 
     /// Write a recording directory, or an MCAP file: per cloud the depth
     /// image (/slope/depth, foxglove.RawImage) and the cloud
@@ -110,7 +116,7 @@ pub struct RecordArgs {
     pub source: RecordSource,
 
     /// Stop after this many frames (at least 1).
-    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    #[arg(long, value_parser = max_frames_arg)]
     pub max_frames: Option<u64>,
 
     /// Stop after this many seconds from the first frame.
@@ -150,6 +156,17 @@ pub struct RecordArgs {
 
     #[command(flatten)]
     pub common: CommonArgs,
+}
+
+impl RecordArgs {
+    /// `-o PATH` (or PATH without the flag).
+    pub fn out_dir(&self) -> &Path {
+        match (&self.output, &self.output_positional) {
+            (Some(path), _) | (None, Some(path)) => path,
+            // Unreachable: the group `out` requires one of the two.
+            (None, None) => Path::new(""),
+        }
+    }
 }
 
 /// When to stop recording.
@@ -376,7 +393,7 @@ enum Sink {
 impl Sink {
     /// Creates the sink of `args` for clouds described by `info`.
     fn create(args: &RecordArgs, info: &SourceInfo, sensor: &str) -> anyhow::Result<Self> {
-        let out = &args.out_dir;
+        let out = args.out_dir();
         Ok(match args.format {
             RecordFormat::Recording => {
                 let mut recording = RecordingWriter::create(out, &meta_for(info, sensor), false)
@@ -415,7 +432,7 @@ pub fn record_topic(
         ),
         RecordFormat::Recording => None,
     };
-    tracing::info!(service = subscriber.service_name(), out = %args.out_dir.display(), "recording the cloud topic");
+    tracing::info!(service = subscriber.service_name(), out = %args.out_dir().display(), "recording the cloud topic");
 
     let mut stats = RecordStats::default();
     let mut writer: Option<(Sink, CloudHeader)> = None;
@@ -537,7 +554,7 @@ pub fn record_topic(
                             format!(
                                 "cannot write frame {} into {}",
                                 stats.written,
-                                args.out_dir.display()
+                                args.out_dir().display()
                             )
                         })?;
                 }
@@ -574,7 +591,7 @@ pub fn record_topic(
                     }
                 }
             }
-            sink.finish(&args.out_dir)?;
+            sink.finish(args.out_dir())?;
         }
         None => tracing::warn!("no cloud arrived; nothing was recorded"),
     }
@@ -607,16 +624,16 @@ fn record_kinect(
         });
     };
     let mut writer =
-        RecordingWriter::create(&args.out_dir, &meta_for(source.info(), "kinect2"), false)
-            .with_context(|| format!("cannot create the recording {}", args.out_dir.display()))?;
+        RecordingWriter::create(args.out_dir(), &meta_for(source.info(), "kinect2"), false)
+            .with_context(|| format!("cannot create the recording {}", args.out_dir().display()))?;
     writer.set_compression(args.compression.into());
-    tracing::info!(serial = source.serial(), out = %args.out_dir.display(), "recording the Kinect v2");
+    tracing::info!(serial = source.serial(), out = %args.out_dir().display(), "recording the Kinect v2");
     let stats = record_source(&mut source, &mut writer, limits, stop);
     source.close();
     let stats = stats?;
     writer
         .finish()
-        .with_context(|| format!("cannot finish the recording {}", args.out_dir.display()))?;
+        .with_context(|| format!("cannot finish the recording {}", args.out_dir().display()))?;
     Ok(stats)
 }
 
@@ -638,14 +655,14 @@ pub fn run(args: &RecordArgs, stop: &StopFlag) -> anyhow::Result<RecordStats> {
     if args.format == RecordFormat::Mcap {
         return record_mcap(args, &limits, stop);
     }
-    let created = prepare_out_dir(&args.out_dir)?;
+    let created = prepare_out_dir(args.out_dir())?;
     let result = match args.source {
         RecordSource::Topic => record_topic(args, &limits, stop),
         RecordSource::Kinect => record_kinect(args, &limits, stop),
     };
-    if created && is_empty_dir(&args.out_dir) {
+    if created && is_empty_dir(args.out_dir()) {
         // Nothing was recorded into the directory we made: leave no trace.
-        if let Err(err) = std::fs::remove_dir(&args.out_dir) {
+        if let Err(err) = std::fs::remove_dir(args.out_dir()) {
             tracing::debug!(error = %err, "could not remove the empty output directory");
         }
     }
@@ -655,7 +672,7 @@ pub fn run(args: &RecordArgs, stop: &StopFlag) -> anyhow::Result<RecordStats> {
         missed = stats.missed,
         skipped = stats.skipped,
         interrupted = stats.stopped,
-        out = %args.out_dir.display(),
+        out = %args.out_dir().display(),
         "recording finished"
     );
     Ok(stats)
@@ -673,7 +690,7 @@ fn record_mcap(
              (--format recording) and convert it with slope-convert RECORDING OUT.mcap"
         );
     }
-    let out = &args.out_dir;
+    let out = args.out_dir();
     if out.exists() {
         anyhow::bail!(
             "{} exists; give a new file name for the MCAP file",
@@ -840,6 +857,12 @@ mod tests {
         };
         assert!(parse(&["out", "--max-frames", "0"]).is_err());
         assert!(parse(&["out", "--max-frames", "1"]).is_ok());
+        let flag = parse(&["-o", "out1"]).expect("-o");
+        assert_eq!(flag.out_dir(), Path::new("out1"));
+        let positional = parse(&["out2"]).expect("positional");
+        assert_eq!(positional.out_dir(), Path::new("out2"));
+        assert!(parse(&[]).is_err(), "no output");
+        assert!(parse(&["-o", "a", "b"]).is_err(), "two outputs");
         #[cfg(feature = "kinect2")]
         {
             assert!(parse(&["out", "--pipeline", "vulkan"]).is_err());

@@ -57,8 +57,9 @@ pub struct Args {
     pub scene: Option<PathBuf>,
 
     /// Angle of the inclined plane to the ground, degrees, in (0, 90];
-    /// 90 is a wall; 0 removes the ramp (flat ground only).
-    #[arg(long, value_name = "DEG")]
+    /// 90 is a wall; 0 removes the ramp (flat ground only); negative is a
+    /// descending slope (as --descending).
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
     pub slope: Option<f64>,
 
     /// The ground drops away at the foot line instead of rising.
@@ -125,6 +126,14 @@ pub struct Args {
     /// PNG compression: fast, balanced or high (smallest files).
     #[arg(long, value_enum, default_value_t = Compression::Balanced)]
     pub compression: Compression,
+
+    /// More log output (-v debug, -vv trace). RUST_LOG overrides.
+    #[arg(short, long, action = clap::ArgAction::Count)]
+    pub verbose: u8,
+
+    /// Less log output (errors only).
+    #[arg(short, long, conflicts_with = "verbose")]
+    pub quiet: bool,
 }
 
 /// PNG compression level of the written images.
@@ -146,6 +155,16 @@ impl From<Compression> for PngCompression {
 }
 
 impl Args {
+    /// The log level of `-v`/`-q`, as in every slope program.
+    pub fn log_level(&self) -> &'static str {
+        match (self.quiet, self.verbose) {
+            (true, _) => "error",
+            (false, 0) => "info",
+            (false, 1) => "debug",
+            (false, _) => "trace",
+        }
+    }
+
     /// The scene and sensor model these arguments describe: the default
     /// ramp scene (or the scene file), overridden by the flags given.
     pub fn scene_and_model(&self) -> anyhow::Result<(Scene, SensorModel)> {
@@ -198,9 +217,9 @@ impl Args {
         } else if self.slope.is_some() || ramp_flags {
             let ramp = scene.ramp.get_or_insert_with(Ramp::default);
             if let Some(s) = self.slope {
-                ramp.slope_deg = s;
+                ramp.slope_deg = s.abs();
             }
-            if self.descending {
+            if self.descending || self.slope.is_some_and(|s| s < 0.0) {
                 ramp.direction = SlopeDirection::Descending;
             }
             if let Some(d) = self.distance {
@@ -325,5 +344,17 @@ mod tests {
             .scene_and_model()
             .is_err());
         assert!(parse(&["--slope", "120"]).scene_and_model().is_err());
+        let (down, _) = parse(&["--slope", "-5"]).scene_and_model().expect("valid");
+        let ramp = down.ramp.expect("ramp");
+        assert_eq!(ramp.direction, SlopeDirection::Descending);
+        assert_eq!(ramp.slope_deg, 5.0);
+    }
+
+    #[test]
+    fn verbosity_flags_are_those_of_every_slope_program() {
+        assert_eq!(parse(&["-vv"]).log_level(), "trace");
+        assert_eq!(parse(&["-q"]).log_level(), "error");
+        assert_eq!(parse(&[]).log_level(), "info");
+        assert!(Args::try_parse_from(["slope-synth", "-o", "x", "-q", "-v"]).is_err());
     }
 }
