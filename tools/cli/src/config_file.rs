@@ -614,6 +614,20 @@ mod tests {
     }
 
     #[test]
+    fn the_shipped_paper_literal_preset_is_a_daemon_config_file() {
+        let text = include_str!("../../../pipeline/presets/paper-literal.toml");
+        let file = SlopeFile::from_toml_str(text).expect("valid");
+        assert_eq!(file.estimator, EstimatorConfig::paper_literal());
+        assert_eq!(
+            SlopeFile {
+                estimator: EstimatorConfig::default(),
+                ..file
+            },
+            SlopeFile::default()
+        );
+    }
+
+    #[test]
     fn a_missing_default_file_means_the_defaults() {
         let dir = tempfile::tempdir().expect("temp dir");
         let default = dir.path().join("slope.toml");
