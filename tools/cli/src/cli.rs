@@ -2,9 +2,12 @@
 //! logging set-up, and SIGINT/SIGTERM handling.
 
 use std::io::IsTerminal;
+use std::path::Path;
 
 use clap::Args;
 use slope_ipc_types::{ServiceNames, DEFAULT_SERVICE_PREFIX, SERVICE_PREFIX_ENV};
+
+use crate::config_file::{config_path, SlopeFile, DEFAULT_CONFIG_PATH};
 use slope_sensor::publish::StopFlag;
 use tracing_subscriber::EnvFilter;
 
@@ -49,7 +52,8 @@ pub struct CommonArgs {
     /// Prefix of the iceoryx2 service names (`<prefix>/cloud`,
     /// `<prefix>/estimate`). Processes talk to each other only when they
     /// share it; tests use a unique one each. Default: `service_prefix` of
-    /// the config file for the programs that read one, else "slope".
+    /// the config file (/etc/slope/slope.toml, or a daemon's --config),
+    /// else "slope".
     #[arg(
         long,
         env = SERVICE_PREFIX_ENV,
@@ -63,10 +67,22 @@ pub struct CommonArgs {
 }
 
 impl CommonArgs {
-    /// The service names under `--service-prefix` (or its environment
-    /// variable), else the default prefix.
-    pub fn service_names(&self) -> ServiceNames {
-        ServiceNames::new(self.prefix_or(DEFAULT_SERVICE_PREFIX))
+    /// A client's service names (`slope-echo`, `slope-record`): the prefix
+    /// of `--service-prefix` (or its environment variable), else the
+    /// daemons' `service_prefix` in /etc/slope/slope.toml when that file
+    /// exists, else "slope"; so a client started by hand finds the daemons
+    /// the file configures. A file that cannot be read is an error.
+    pub fn service_names(&self) -> anyhow::Result<ServiceNames> {
+        self.service_names_from(Path::new(DEFAULT_CONFIG_PATH))
+    }
+
+    /// [`Self::service_names`] with `default` for /etc/slope/slope.toml.
+    pub fn service_names_from(&self, default: &Path) -> anyhow::Result<ServiceNames> {
+        if let Some(prefix) = &self.service_prefix {
+            return Ok(ServiceNames::new(prefix.clone()));
+        }
+        let file = SlopeFile::load(config_path(None, default).as_deref())?;
+        Ok(ServiceNames::new(file.service_prefix))
     }
 
     /// `--service-prefix` (or its environment variable), else `fallback`
@@ -258,5 +274,41 @@ pub fn wait_loop(
     match failure {
         Some(err) => Err(err),
         None => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn common(prefix: Option<&str>) -> CommonArgs {
+        CommonArgs {
+            service_prefix: prefix.map(str::to_string),
+            log: LogArgs::default(),
+        }
+    }
+
+    #[test]
+    fn a_client_takes_the_flag_else_the_daemons_file_else_the_default() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let file = dir.path().join("slope.toml");
+        let missing = dir.path().join("missing.toml");
+        // No file: the default prefix.
+        let names = common(None).service_names_from(&missing).expect("names");
+        assert_eq!(names.prefix(), DEFAULT_SERVICE_PREFIX);
+        // The file's prefix, unless the flag gives one.
+        std::fs::write(&file, "service_prefix = \"robot7\"\n").expect("write");
+        let names = common(None).service_names_from(&file).expect("names");
+        assert_eq!(names.prefix(), "robot7");
+        let names = common(Some("lab"))
+            .service_names_from(&file)
+            .expect("names");
+        assert_eq!(names.prefix(), "lab");
+        // A broken file is an error that names it, not a silent default.
+        std::fs::write(&file, "service_prefx = \"robot7\"\n").expect("write");
+        let e = common(None).service_names_from(&file).unwrap_err();
+        let report = error_report(&e);
+        assert!(report.contains("slope.toml"), "{report}");
+        assert!(report.contains("service_prefx"), "{report}");
     }
 }

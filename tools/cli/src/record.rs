@@ -422,7 +422,7 @@ pub fn record_topic(
     limits: &RecordLimits,
     stop: &StopFlag,
 ) -> anyhow::Result<RecordStats> {
-    let names = args.common.service_names();
+    let names = args.common.service_names()?;
     let node = create_node(&node_name("slope-record"))?;
     let subscriber =
         CloudSubscriber::create(&node, &names).context("cannot subscribe to clouds")?;
