@@ -110,11 +110,11 @@ fn endpoint_list(endpoints: &[String]) -> String {
 }
 
 pub fn run(args: &BridgeArgs, stop: &StopFlag) -> anyhow::Result<BridgeStats> {
+    let names = args.common.service_names()?;
     let config = zenoh_config(args)?;
     let session = zenoh::open(config)
         .wait()
         .map_err(|e| anyhow::anyhow!("cannot open the Zenoh session: {e}"))?;
-    let names = args.common.service_names();
     let key_prefix = args
         .key_prefix
         .clone()
