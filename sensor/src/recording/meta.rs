@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use slope_ipc_types::{Intrinsics, Mount};
 use toml::{Table, Value};
 
@@ -49,8 +49,10 @@ impl DepthInfo {
     }
 }
 
-/// `[mount]`: the camera's pose on the robot; each key optional.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
+/// `[mount]`: the camera's pose on the robot; each key optional (also the
+/// `[mount]` of the daemons' configuration file, which serde reads).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct MountInfo {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub height_m: Option<f64>,

@@ -210,7 +210,7 @@ pub fn resolve_options(args: &CaptureArgs, file: &SlopeFile) -> anyhow::Result<K
         gpu_device: capture.gpu_device,
         depth,
         color: capture.color,
-        mount: file.mount.mount(),
+        mount: file.mount.to_mount(),
         wait_for_device: args.wait_for_device,
         frame_timeout: Duration::from_secs_f64(capture.frame_timeout_s),
         ..Kinect2Options::default()

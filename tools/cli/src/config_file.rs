@@ -32,6 +32,7 @@ use serde::{Deserialize, Serialize};
 use slope_ipc_types::{Mount, DEFAULT_SERVICE_PREFIX};
 use slope_pipeline::config::ConfigError;
 use slope_pipeline::EstimatorConfig;
+use slope_sensor::recording::MountInfo;
 
 use crate::cli::prefix_arg;
 use crate::health::DEFAULT_HEALTH_INTERVAL_S;
@@ -52,7 +53,8 @@ pub struct SlopeFile {
     /// Prefix of the iceoryx2 service names.
     pub service_prefix: String,
     pub health: HealthSection,
-    pub mount: MountSection,
+    /// `[mount]`: the camera's pose on the robot; a key left out is unknown.
+    pub mount: MountInfo,
     pub capture: CaptureSection,
     pub estimator: EstimatorConfig,
 }
@@ -62,7 +64,7 @@ impl Default for SlopeFile {
         Self {
             service_prefix: DEFAULT_SERVICE_PREFIX.to_string(),
             health: HealthSection::default(),
-            mount: MountSection::default(),
+            mount: MountInfo::default(),
             capture: CaptureSection::default(),
             estimator: EstimatorConfig::default(),
         }
@@ -81,29 +83,6 @@ impl Default for HealthSection {
     fn default() -> Self {
         Self {
             interval_s: DEFAULT_HEALTH_INTERVAL_S,
-        }
-    }
-}
-
-/// `[mount]`: the camera's pose on the robot; a key left out is unknown.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct MountSection {
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub height_m: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub pitch_deg: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub roll_deg: Option<f64>,
-}
-
-impl MountSection {
-    /// The mount sent with every cloud (unknown values NaN).
-    pub fn mount(&self) -> Mount {
-        Mount {
-            height_m: self.height_m.unwrap_or(f64::NAN),
-            pitch_deg: self.pitch_deg.unwrap_or(f64::NAN),
-            roll_deg: self.roll_deg.unwrap_or(f64::NAN),
         }
     }
 }
