@@ -198,8 +198,16 @@ impl Proc {
         None
     }
 
-    /// Every stderr line seen so far plus whatever is buffered now.
+    /// Every stderr line seen so far plus whatever is buffered now. Once
+    /// the process has exited, reads on until its stderr closes (at most 5 s
+    /// more): the reader thread may not have caught up with the exit yet.
     pub fn stderr_lines(&mut self) -> &[String] {
+        if let Ok(Some(_)) = self.child.try_wait() {
+            let until = deadline(5.0);
+            while let Some(line) = recv_until(&self.stderr, until) {
+                self.stderr_seen.push(line);
+            }
+        }
         while let Ok(line) = self.stderr.try_recv() {
             self.stderr_seen.push(line);
         }
