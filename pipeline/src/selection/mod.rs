@@ -79,11 +79,11 @@ impl PlaneSummary {
         Self {
             plane: plane.plane,
             inliers: plane.inliers.len(),
-            bottom_pixels: plane
-                .inliers
-                .iter()
-                .filter(|&&i| i as usize >= bottom_start)
-                .count(),
+            // Inliers are in pixel order: those of the bottom third are a tail.
+            bottom_pixels: plane.inliers.len()
+                - plane
+                    .inliers
+                    .partition_point(|&i| (i as usize) < bottom_start),
             centroid: plane.centroid,
             quality: plane_quality(cloud, &plane.plane, &plane.inliers, threshold, noise),
         }
