@@ -140,7 +140,8 @@ impl NormalEstimator {
     /// Normals of the points `members` (pixel indices into `cloud`, one
     /// plane's points), each from its neighbours among `members`. The result
     /// is aligned with `members`; an entry is NaN when the point has no
-    /// reading or its neighbourhood is degenerate.
+    /// reading or its neighbourhood is degenerate (every entry for a view of
+    /// width 0).
     pub fn estimate(
         &mut self,
         cloud: &CloudView<'_>,
@@ -443,6 +444,10 @@ fn start_radius(k: usize) -> usize {
 /// Bounding box of the members' pixels and their centroid.
 fn bounds_and_centre(cloud: &CloudView<'_>, members: &[u32]) -> Option<(Bounds, Vector3<f64>)> {
     let w = cloud.width;
+    if w == 0 {
+        // No pixel grid (a malformed view): no pixel has a place in it.
+        return None;
+    }
     let (mut u0, mut v0, mut u1, mut v1) = (usize::MAX, usize::MAX, 0, 0);
     let mut sum = Vector3::zeros();
     let mut count = 0usize;
@@ -975,6 +980,31 @@ mod tests {
                 "{k}: {n:?} vs {d:?}"
             );
         }
+    }
+
+    /// A view of width 0 (malformed: its points have no pixel grid) gives
+    /// every member a NaN normal, counted undefined, instead of a panic.
+    #[test]
+    fn a_view_of_width_0_gives_nan_normals() {
+        let scene = Scene::wall_facing(2.5);
+        let cloud = SceneCloud::render(&scene, 32, 24, 0.0, 1);
+        let members = all_measured(&cloud);
+        assert!(!members.is_empty());
+        let view = CloudView {
+            width: 0,
+            ..cloud.view()
+        };
+        let mut est = NormalEstimator::new();
+        let (normals, stats) = est.estimate(
+            &view,
+            &members,
+            &NormalsConfig::default(),
+            &Vector3::zeros(),
+        );
+        assert_eq!(normals.len(), members.len());
+        assert!(normals.iter().all(|n| n.iter().all(|c| c.is_nan())));
+        assert_eq!(stats.undefined, members.len());
+        assert_eq!(stats.from_window + stats.from_tree, 0);
     }
 
     #[test]

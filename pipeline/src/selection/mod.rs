@@ -133,7 +133,9 @@ pub fn select_planes(
 
 /// The inclined plane over `ground` (the second half of
 /// [`select_planes`]); without one, the error gives the ground back (a
-/// flat floor ahead is still a measurement).
+/// flat floor ahead is still a measurement). A `Ground::Planes` whose first
+/// (lowest) index is missing or not an index into `planes` has no inclined
+/// plane either.
 pub fn select_inclined(
     planes: &[PlaneSummary],
     ground: Ground,
@@ -143,9 +145,18 @@ pub fn select_inclined(
     let reference = mount_up
         .and_then(|u| u.try_normalize(1e-12))
         .unwrap_or(-Vector3::y());
-    let (up, members): (Vector3<f64>, &[usize]) = match &ground {
-        Ground::Planes(members) => (planes[members[0]].plane.normal, members),
-        Ground::Mount => (reference, &[]),
+    let up = match &ground {
+        Ground::Planes(members) => match members.first().and_then(|&k| planes.get(k)) {
+            Some(lowest) => lowest.plane.normal,
+            // No lowest plane among `planes` (an empty list, an index out of
+            // range): nothing to measure a slope against.
+            None => return Err(ground),
+        },
+        Ground::Mount => reference,
+    };
+    let members: &[usize] = match &ground {
+        Ground::Planes(members) => members,
+        Ground::Mount => &[],
     };
     let forward = forward_direction(&up);
     match inclined::choose_inclined(planes, members, &up, &forward, config) {

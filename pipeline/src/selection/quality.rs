@@ -38,6 +38,8 @@ pub struct PlaneQuality {
 }
 
 /// The quality of `plane` over its `inliers` (pixel indices of `cloud`).
+/// Without a measured inlier (or for a view of width 0): NaN RMS figures,
+/// no area, no border share.
 pub fn plane_quality(
     cloud: &CloudView<'_>,
     plane: &Plane,
@@ -53,6 +55,10 @@ pub fn plane_quality(
         cloud.focal_px().powi(2)
     };
     let mut sums = Sums::default();
+    if w == 0 {
+        // No pixel grid (a malformed view): no inlier has a place in it.
+        return sums.quality();
+    }
     let stride = inliers.len().div_ceil(QUALITY_SAMPLES).max(1);
     for &pixel in inliers.iter().step_by(stride) {
         let pixel = pixel as usize;
@@ -171,6 +177,29 @@ mod tests {
             "{}",
             q.border_fraction
         );
+    }
+
+    /// A view of width 0 (malformed: its points have no pixel grid) has no
+    /// inlier to measure: the empty quality, instead of a panic.
+    #[test]
+    fn a_view_of_width_0_has_the_empty_quality() {
+        let scene = Scene::wall_facing(2.0);
+        let cloud = SceneCloud::render(&scene, 64, 48, 0.0, 0);
+        let view = CloudView {
+            width: 0,
+            ..cloud.view()
+        };
+        let all: Vec<u32> = (0..view.points.len() as u32).collect();
+        let plane = Plane::from_point_normal(&Vector3::new(0.0, 0.0, 2.0), &-Vector3::z()).unwrap();
+        let q = plane_quality(
+            &view,
+            &plane,
+            &all,
+            &Threshold::of(&RansacConfig::default()),
+            NoiseModel::Kinect2,
+        );
+        assert!(q.rms_m.is_nan() && q.relative_rms.is_nan() && q.noise_ratio.is_nan());
+        assert_eq!((q.area_m2, q.border_fraction), (0.0, 0.0));
     }
 
     /// Points spread evenly over the threshold band give 1/sqrt(3).

@@ -254,6 +254,30 @@ fn parallel_and_inclined_do_not_overlap() {
     }
 }
 
+/// A ground of no plane, or of an index that is not one of `planes`, has
+/// no inclined plane over it (the error gives the ground back), however
+/// good a ramp is in the list.
+#[test]
+fn a_ground_without_a_plane_of_the_list_has_no_inclined_plane() {
+    let scene = Scene::ramp(16.0);
+    let planes = vec![
+        summary(&scene, 0, 30_000, 1.0),
+        summary(&scene, 1, 6000, 0.5),
+    ];
+    let sel = select_inclined(&planes, Ground::Planes(vec![0]), None, &config()).unwrap();
+    assert_eq!(sel.inclined, 1);
+    for ground in [Ground::Planes(vec![]), Ground::Planes(vec![2, 0])] {
+        assert_eq!(
+            select_inclined(&planes, ground.clone(), mount_up(&scene), &config()),
+            Err(ground)
+        );
+    }
+    assert_eq!(
+        select_inclined(&[], Ground::Planes(vec![0]), None, &config()),
+        Err(Ground::Planes(vec![0]))
+    );
+}
+
 #[test]
 fn distance_along_the_axis() {
     let plane =
