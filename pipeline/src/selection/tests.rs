@@ -192,11 +192,11 @@ fn surfaces_facing_down_are_never_inclined() {
 /// ramp itself (a smaller, farther plane).
 fn ramp_behind_a_spoilt_copy(
     scene: &Scene,
-    spoil: impl Fn(&mut PlaneQuality),
+    spoil: impl Fn(&mut PlaneSummary),
 ) -> Vec<PlaneSummary> {
     let mut spoilt = summary(scene, 1, 9000, 0.6);
-    spoil(&mut spoilt.quality);
     spoilt.centroid *= 0.5;
+    spoil(&mut spoilt);
     vec![
         summary(scene, 0, 30_000, 1.0),
         spoilt,
@@ -208,7 +208,7 @@ fn ramp_behind_a_spoilt_copy(
 #[test]
 fn rough_surfaces_are_not_planes() {
     let scene = Scene::ramp(30.0);
-    let planes = ramp_behind_a_spoilt_copy(&scene, |q| q.relative_rms = 0.55);
+    let planes = ramp_behind_a_spoilt_copy(&scene, |p| p.quality.relative_rms = 0.55);
     let sel = select_planes(&planes, mount_up(&scene), None, &config()).unwrap();
     assert_eq!(sel.inclined, 2);
     let mut rough_floor = planes.clone();
@@ -226,7 +226,7 @@ fn rough_surfaces_are_not_planes() {
 #[test]
 fn the_inclined_plane_is_flat_at_the_sensors_noise_level() {
     let scene = Scene::ramp(30.0);
-    let planes = ramp_behind_a_spoilt_copy(&scene, |q| q.noise_ratio = 3.8);
+    let planes = ramp_behind_a_spoilt_copy(&scene, |p| p.quality.noise_ratio = 3.8);
     let sel = select_planes(&planes, mount_up(&scene), None, &config()).unwrap();
     assert_eq!(sel.inclined, 2);
     assert_eq!(
@@ -237,6 +237,56 @@ fn the_inclined_plane_is_flat_at_the_sensors_noise_level() {
     bent_floor[0].quality.noise_ratio = 3.3;
     let sel = select_planes(&bent_floor, mount_up(&scene), None, &config()).unwrap();
     assert_eq!((sel.ground, sel.inclined), (Ground::Planes(vec![0]), 2));
+}
+
+/// A flat patch of less than `inclined_min_area_m2` (0.04 m^2) is not the
+/// inclined plane, however near: the farther ramp is; with 0.05 m^2 the
+/// nearer patch is.
+#[test]
+fn the_inclined_plane_has_the_minimum_area() {
+    let scene = Scene::ramp(30.0);
+    assert_eq!(config().inclined_min_area_m2, 0.04);
+    for (area_m2, expected) in [(0.03, 2), (0.05, 1)] {
+        let planes = ramp_behind_a_spoilt_copy(&scene, |p| p.quality.area_m2 = area_m2);
+        let sel = select_planes(&planes, mount_up(&scene), None, &config()).unwrap();
+        assert_eq!(sel.inclined, expected, "{area_m2}");
+    }
+    let planes = ramp_behind_a_spoilt_copy(&scene, |p| p.quality.area_m2 = 0.03);
+    assert_eq!(
+        select_planes(&planes[..2], mount_up(&scene), None, &config()),
+        Err(EstimateStatus::NoInclinedPlane)
+    );
+}
+
+/// A copy of the ramp whose centroid lies behind the camera (its distance
+/// along forward negative, so the "nearest") is not the inclined plane.
+#[test]
+fn the_inclined_plane_lies_ahead() {
+    let scene = Scene::ramp(30.0);
+    for up in [mount_up(&scene), None] {
+        let planes = ramp_behind_a_spoilt_copy(&scene, |p| p.centroid = -p.centroid);
+        let sel = select_planes(&planes, up, None, &config()).unwrap();
+        assert!(planes[1].centroid.dot(&sel.forward) < 0.0);
+        assert_eq!(sel.inclined, 2, "{up:?}");
+        assert_eq!(
+            select_planes(&planes[..2], up, None, &config()),
+            Err(EstimateStatus::NoInclinedPlane)
+        );
+    }
+}
+
+/// The nearest candidate is passed over when it has fewer than
+/// `min_relative_support` (a quarter) of the best-supported candidate's
+/// pixels: 1000 of 6000 is passed over, 2000 of 6000 is not.
+#[test]
+fn the_nearest_inclined_plane_has_a_quarter_of_the_best_support() {
+    let scene = Scene::ramp(30.0);
+    assert_eq!(config().min_relative_support, 0.25);
+    for (pixels, expected) in [(1000, 2), (2000, 1)] {
+        let planes = ramp_behind_a_spoilt_copy(&scene, |p| p.inliers = pixels);
+        let sel = select_planes(&planes, mount_up(&scene), None, &config()).unwrap();
+        assert_eq!(sel.inclined, expected, "{pixels}");
+    }
 }
 
 /// One tolerance makes "parallel" and "inclined": a plane 3.9 degrees off the
