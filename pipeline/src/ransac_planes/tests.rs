@@ -135,10 +135,9 @@ fn tiny_images_and_oversized_strides_give_no_plane_and_no_panic() {
                 &cfg,
                 &mut ChaCha8Rng::seed_from_u64(0),
             );
-            assert!(
-                planes.iter().all(|p| p.inliers.len() >= 3),
-                "{w}x{h} stride {stride}"
-            );
+            // At most 4 measured pixels: too few for the normal gate's
+            // 6-pixel neighbourhoods, so no hypothesis and no plane.
+            assert!(planes.is_empty(), "{w}x{h} stride {stride}: {planes:?}");
         }
     }
     // A full frame with a stride larger than the image.
