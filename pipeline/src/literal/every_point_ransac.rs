@@ -296,10 +296,15 @@ mod tests {
         );
         let t = Threshold::of(&config);
         let planes = [
-            Plane::from_point_normal(&Vector3::new(0.0, 0.5, 2.0), &Vector3::new(0.1, -1.0, 0.3)),
-            ransac.planes().first().map(|p| p.plane),
+            Plane::from_point_normal(&Vector3::new(0.0, 0.5, 2.0), &Vector3::new(0.1, -1.0, 0.3))
+                .expect("a non-zero normal"),
+            ransac
+                .planes()
+                .first()
+                .expect("the ramp scene has a plane of 10 points")
+                .plane,
         ];
-        for plane in planes.into_iter().flatten() {
+        for plane in planes {
             let brute = (0..cloud.points.len())
                 .filter_map(|i| view.point(i))
                 .filter(|p| plane.signed_distance(p).abs() <= t.at(p))
