@@ -2,6 +2,8 @@
 //! chosen pair, the pass-through range, normal and cluster statistics.
 //!
 //! `cargo run -p slope-pipeline --example debug_frame -- DIR [FRAME]`
+//! (`CONFIG=toml` runs with that estimator config, e.g.
+//! `CONFIG=$'[ransac]\ndistance_threshold_per_m2 = 0'`; unset: the default)
 
 #[path = "../tests/common/mod.rs"]
 mod common;
