@@ -1,8 +1,8 @@
-//! Ablation of our changes to the paper's pipeline (pipeline README, "What
-//! each change buys"): the paper as written
+//! Ablation of our changes to the paper's pipeline (pipeline README, "The
+//! paper as written, and what each change buys"): the paper as written
 //! (`EstimatorConfig::paper_literal`), each change switched on alone, all
 //! of those our default keeps (our default), and each switched off alone
-//! from our default (on alone, for the three it does not keep);
+//! from our default (switched on, for the two it does not keep: 8 and 9);
 //! on simulated Kinect v2 frames (analytic scenes, 5-90 degrees, walls,
 //! clutter; re-rendered with new noise for every seed) and on the real
 //! frames in `shared/data` as recorded and mirrored. Prints a Markdown
