@@ -1,5 +1,7 @@
 //! Runs the estimator over recordings and prints, per recording and method,
-//! the median slope, its error against `[truth]` and the mean stage timings.
+//! the median slope, its error against `[truth]`, the smallest and largest
+//! slope, the median of the frames' slope spreads (`slope_std_deg`) and the
+//! mean stage timings.
 //!
 //! `cargo run --release -p slope-pipeline --example eval_recordings -- DIR...`
 //! (`METHODS=paper,tls`, `CONFIG='<toml>'`, `REPEAT=n` runs each frame n
@@ -83,6 +85,8 @@ fn main() {
             }
             slopes.sort_by(f64::total_cmp);
             let median = slopes.get(slopes.len() / 2).copied().unwrap_or(f64::NAN);
+            stds.sort_by(f64::total_cmp);
+            let median_std = stds.get(stds.len() / 2).copied().unwrap_or(f64::NAN);
             let truth = rec.truth_slope_deg.unwrap_or(f64::NAN);
             let ok = statuses.iter().filter(|s| **s == "ok").count();
             let st: Vec<String> = stages
@@ -90,14 +94,14 @@ fn main() {
                 .map(|(s, ms)| format!("{s} {:.1}", ms / n as f64))
                 .collect();
             println!(
-                "{:<14} {:<40} median {:8.3} |err| {:6.3} ok {ok}/{n} min {:.2} max {:.2} std {:.2}  {:.1} ms [{}]",
+                "{:<14} {:<40} median {:8.3} |err| {:6.3} ok {ok}/{n} min {:.2} max {:.2} median std {:.2}  {:.1} ms [{}]",
                 method.name(),
                 dir,
                 median,
                 (median.abs() - truth).abs(),
                 slopes.first().copied().unwrap_or(f64::NAN),
                 slopes.last().copied().unwrap_or(f64::NAN),
-                stds.first().copied().unwrap_or(f64::NAN),
+                median_std,
                 total / n as f64,
                 st.join(", ")
             );
