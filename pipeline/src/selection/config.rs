@@ -23,7 +23,7 @@ pub struct SelectionConfig {
     /// An inclined plane (the surface the slope is measured on) is flat when
     /// the RMS of its inliers' distances, in standard deviations of the
     /// noise model, is at most this (real Kinect v2 risers and walls 1.2-2.6,
-    /// the Kinect v1 office walls 0.6-1.0 with their model; a bed's fabric
+    /// the Kinect v1 office walls 0.4-1.0 with their model; a bed's fabric
     /// side 3.8-5.8).
     pub max_noise_ratio: f64,
     /// An inclined plane covers at least this much surface, square metres
