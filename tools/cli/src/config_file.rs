@@ -29,14 +29,14 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
-use slope_ipc_types::{Mount, DEFAULT_SERVICE_PREFIX};
+use slope_ipc_types::DEFAULT_SERVICE_PREFIX;
 use slope_pipeline::config::ConfigError;
 use slope_pipeline::EstimatorConfig;
 use slope_sensor::recording::MountInfo;
 
 use crate::cli::prefix_arg;
 use crate::health::DEFAULT_HEALTH_INTERVAL_S;
-use crate::mount_args::check_mount;
+use crate::mount_args::check_mount_info;
 use crate::replay::POSITIVE_RANGE;
 
 /// The file the daemons read when not given `--config`, if it exists (the
@@ -245,43 +245,11 @@ impl SlopeFile {
     }
 
     fn validate_mount(&self) -> Result<(), ConfigFileError> {
-        let m = &self.mount;
-        let unknown = Mount::UNKNOWN;
-        for (key, value, alone) in [
-            (
-                "height_m",
-                m.height_m,
-                Mount {
-                    height_m: m.height_m.unwrap_or(f64::NAN),
-                    ..unknown
-                },
-            ),
-            (
-                "pitch_deg",
-                m.pitch_deg,
-                Mount {
-                    pitch_deg: m.pitch_deg.unwrap_or(f64::NAN),
-                    ..unknown
-                },
-            ),
-            (
-                "roll_deg",
-                m.roll_deg,
-                Mount {
-                    roll_deg: m.roll_deg.unwrap_or(f64::NAN),
-                    ..unknown
-                },
-            ),
-        ] {
-            if let (Some(value), Err(range)) = (value, check_mount(&alone)) {
-                return Err(ConfigFileError::OutOfRange {
-                    key: format!("mount.{key}"),
-                    value: value.to_string(),
-                    range,
-                });
-            }
-        }
-        Ok(())
+        check_mount_info(&self.mount).map_err(|(key, value, range)| ConfigFileError::OutOfRange {
+            key: format!("mount.{key}"),
+            value: value.to_string(),
+            range,
+        })
     }
 }
 
@@ -511,6 +479,21 @@ mod tests {
                 "[mount]\nheight_m = 0.0\n",
                 "`mount.height_m` = 0",
                 "above 0",
+            ),
+            (
+                "[mount]\nheight_m = nan\n",
+                "`mount.height_m` = NaN",
+                "above 0",
+            ),
+            (
+                "[mount]\nheight_m = 0.4\npitch_deg = nan\n",
+                "`mount.pitch_deg` = NaN",
+                "at most 90",
+            ),
+            (
+                "[mount]\nroll_deg = -inf\n",
+                "`mount.roll_deg` = -inf",
+                "at most 180",
             ),
             (
                 "[health]\ninterval_s = 0.01\n",
