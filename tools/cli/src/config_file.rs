@@ -158,6 +158,15 @@ pub enum ConfigFileError {
         value: String,
         range: String,
     },
+    /// Two keys that must be in order, each named with its value (either
+    /// may be the one the user set).
+    #[error("`{high_key}` = {high} must be above `{low_key}` = {low}")]
+    NotAbove {
+        high_key: String,
+        high: String,
+        low_key: String,
+        low: String,
+    },
 }
 
 /// The top-level keys of [`EstimatorConfig`], which live under `[estimator]`.
@@ -270,22 +279,27 @@ impl CaptureSection {
                 format!("must be one of {}", PIPELINES.join(", ")),
             );
         }
-        if !(self.min_depth_m >= min && self.min_depth_m < self.max_depth_m) {
+        if !(self.min_depth_m >= min && self.min_depth_m <= max) {
             return bad(
                 "min_depth_m",
                 self.min_depth_m.to_string(),
-                format!(
-                    "must be at least {min} m and below max_depth_m ({})",
-                    self.max_depth_m
-                ),
+                format!("must be from {min} to {max} m, below max_depth_m"),
             );
         }
-        if self.max_depth_m.is_nan() || self.max_depth_m > max {
+        if !(self.max_depth_m >= min && self.max_depth_m <= max) {
             return bad(
                 "max_depth_m",
                 self.max_depth_m.to_string(),
-                format!("must be above min_depth_m and at most {max} m"),
+                format!("must be from {min} to {max} m, above min_depth_m"),
             );
+        }
+        if self.max_depth_m <= self.min_depth_m {
+            return Err(ConfigFileError::NotAbove {
+                high_key: "capture.max_depth_m".into(),
+                high: self.max_depth_m.to_string(),
+                low_key: "capture.min_depth_m".into(),
+                low: self.min_depth_m.to_string(),
+            });
         }
         if !(min..=max).contains(&self.frame_timeout_s) {
             return bad(
@@ -506,14 +520,19 @@ mod tests {
                 "one of default, cpu",
             ),
             (
-                "[capture]\nmin_depth_m = 5.0\n",
-                "`capture.min_depth_m` = 5",
-                "below max_depth_m (4.5)",
+                "[capture]\nmin_depth_m = 0.0\n",
+                "`capture.min_depth_m` = 0",
+                "from 0.001 to 10000000 m",
             ),
             (
                 "[capture]\nmax_depth_m = inf\n",
                 "`capture.max_depth_m` = inf",
-                "at most 10000000",
+                "from 0.001 to 10000000 m",
+            ),
+            (
+                "[capture]\nmax_depth_m = nan\n",
+                "`capture.max_depth_m` = NaN",
+                "from 0.001 to 10000000 m",
             ),
             (
                 "[capture]\nframe_timeout_s = 0.0\n",
@@ -540,6 +559,30 @@ mod tests {
             assert!(message.starts_with(key), "{text}: {message}");
             assert!(message.contains(range), "{text}: {message}");
         }
+    }
+
+    /// Whichever of the two keys was set, the message names both with
+    /// their values.
+    #[test]
+    fn keys_out_of_order_are_both_named() {
+        for text in [
+            "[capture]\nmax_depth_m = 0.2\n",
+            "[capture]\nmin_depth_m = 0.5\nmax_depth_m = 0.2\n",
+        ] {
+            assert_eq!(
+                refused(text),
+                "`capture.max_depth_m` = 0.2 must be above `capture.min_depth_m` = 0.5",
+                "{text}"
+            );
+        }
+        assert_eq!(
+            refused("[capture]\nmin_depth_m = 5.0\n"),
+            "`capture.max_depth_m` = 4.5 must be above `capture.min_depth_m` = 5"
+        );
+        assert_eq!(
+            refused("[capture]\nmin_depth_m = 2.0\nmax_depth_m = 2.0\n"),
+            "`capture.max_depth_m` = 2 must be above `capture.min_depth_m` = 2"
+        );
     }
 
     #[test]
