@@ -72,10 +72,18 @@ fn a_streaming_demo_stops_cleanly_with_its_summary() {
     while let Some(line) = demo.stdout_line(deadline(1.0)) {
         rest.push(line);
     }
-    assert!(
-        rest.iter().any(|l| l.starts_with("summary:")),
-        "no summary after the stop: {rest:?}"
-    );
+    let summary = rest
+        .iter()
+        .find(|l| l.starts_with("summary:"))
+        .unwrap_or_else(|| panic!("no summary after the stop: {rest:?}"));
+    // At least the estimate seen before the stop; the recording's length
+    // (the demo does not know how many frames the replay published).
+    let estimates: usize = summary
+        .strip_prefix("summary: ")
+        .and_then(|rest| rest.split(" estimates of a 10-frame recording").next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("unexpected summary {summary:?}"));
+    assert!((1..=10).contains(&estimates), "{summary}");
 }
 
 /// Rows of frames.csv under `dir` (0 while it does not exist yet).
@@ -201,7 +209,10 @@ fn a_waiting_demo_stops_cleanly_with_an_empty_summary() {
             .iter()
             .find(|l| l.starts_with("summary:"))
             .unwrap_or_else(|| panic!("no summary after the stop: {rest:?}"));
-        assert!(summary.contains(" 0 estimates"), "{summary}");
+        assert!(
+            summary.starts_with("summary: 0 estimates of a 10-frame recording"),
+            "{summary}"
+        );
     }
 }
 
