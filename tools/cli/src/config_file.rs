@@ -142,12 +142,17 @@ pub enum ConfigFileError {
         #[source]
         source: Box<ConfigFileError>,
     },
-    #[error("not TOML (line {line}): {message}")]
-    Syntax { line: usize, message: String },
-    #[error("`{key}` (line {line}): {message}")]
+    #[error("not TOML{}: {message}", at_line(*.line))]
+    Syntax {
+        /// 1-based; `None` when the parser did not say.
+        line: Option<usize>,
+        message: String,
+    },
+    #[error("`{key}`{}: {message}", at_line(*.line))]
     Key {
         key: String,
-        line: usize,
+        /// 1-based; `None` when it is not known.
+        line: Option<usize>,
         message: String,
     },
     #[error("`{key}` belongs to the estimator: {fix}")]
@@ -169,6 +174,11 @@ pub enum ConfigFileError {
     },
 }
 
+/// " (line N)", or nothing for an unknown line.
+fn at_line(line: Option<usize>) -> String {
+    line.map_or(String::new(), |line| format!(" (line {line})"))
+}
+
 /// The top-level keys of [`EstimatorConfig`], which live under `[estimator]`.
 const ESTIMATOR_KEYS: [&str; 10] = [
     "method",
@@ -187,10 +197,10 @@ impl SlopeFile {
     /// Parses and validates a file's text; missing keys keep their defaults.
     pub fn from_toml_str(text: &str) -> Result<Self, ConfigFileError> {
         let table: toml::Table = toml::from_str(text).map_err(|e| ConfigFileError::Syntax {
-            line: e.span().map_or(0, |span| line_of(text, span.start)),
+            line: e.span().map(|span| line_of(text, span.start)),
             message: e.message().to_string(),
         })?;
-        check_layout(&table)?;
+        check_layout(text, &table)?;
         let file: Self = toml::from_str(text).map_err(|e| key_error(text, &e))?;
         file.validate()?;
         Ok(file)
@@ -247,7 +257,7 @@ impl SlopeFile {
                 }
             }
             ConfigError::Parse(e) => ConfigFileError::Syntax {
-                line: 0,
+                line: None,
                 message: e.to_string(),
             },
         })
@@ -337,11 +347,11 @@ pub fn config_path(given: Option<&Path>, default: &Path) -> Option<PathBuf> {
 }
 
 /// A file laid out before the sections existed: how to fix it.
-fn check_layout(table: &toml::Table) -> Result<(), ConfigFileError> {
+fn check_layout(text: &str, table: &toml::Table) -> Result<(), ConfigFileError> {
     if table.contains_key("kinect2") {
         return Err(ConfigFileError::Key {
             key: "kinect2".into(),
-            line: 0,
+            line: first_line_of(text, "kinect2"),
             message:
                 "the capture settings are the section [capture]: rename [kinect2] to [capture]"
                     .into(),
@@ -365,13 +375,44 @@ fn check_layout(table: &toml::Table) -> Result<(), ConfigFileError> {
 fn key_error(text: &str, err: &toml::de::Error) -> ConfigFileError {
     let message = err.message().to_string();
     let Some(span) = err.span() else {
-        return ConfigFileError::Syntax { line: 0, message };
+        return ConfigFileError::Syntax {
+            line: None,
+            message,
+        };
     };
     ConfigFileError::Key {
         key: key_path(text, &span),
-        line: line_of(text, span.start),
+        line: Some(line_of(text, span.start)),
         message,
     }
+}
+
+/// The 1-based line where the top-level `key` first appears: a table
+/// header (`[key]`, `[key.sub]`, `[[key]]`) or a key at the top (`key = `,
+/// `key.sub = `, before any header). `None` if it is written some other
+/// way (quoted, say).
+fn first_line_of(text: &str, key: &str) -> Option<usize> {
+    let mut top = true;
+    for (k, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if let Some(header) = line.strip_prefix('[') {
+            let header = header.trim_start_matches('[').trim_start();
+            if header
+                .strip_prefix(key)
+                .is_some_and(|rest| rest.trim_start().starts_with([']', '.']))
+            {
+                return Some(k + 1);
+            }
+            top = false;
+        } else if top
+            && line
+                .strip_prefix(key)
+                .is_some_and(|rest| rest.trim_start().starts_with(['=', '.']))
+        {
+            return Some(k + 1);
+        }
+    }
+    None
 }
 
 /// The 1-based line holding byte `at`.
@@ -601,9 +642,18 @@ mod tests {
         );
         let message = refused("[kinect2]\nserial = \"1\"\n");
         assert!(
-            message.contains("rename [kinect2] to [capture]"),
+            message.starts_with("`kinect2` (line 1): ")
+                && message.contains("rename [kinect2] to [capture]"),
             "{message}"
         );
+        let message = refused("# the camera\n\n[kinect2.more]\nserial = \"1\"\n");
+        assert!(message.starts_with("`kinect2` (line 3): "), "{message}");
+        let message = refused("service_prefix = \"x\"\nkinect2.serial = \"1\"\n");
+        assert!(message.starts_with("`kinect2` (line 2): "), "{message}");
+        // Quoted: found by the parser, not by the line scan; no line then.
+        let message = refused("[\"kinect2\"]\nserial = \"1\"\n");
+        assert!(message.starts_with("`kinect2`: "), "{message}");
+        assert!(!message.contains("line 0"), "{message}");
     }
 
     #[test]
