@@ -84,8 +84,8 @@ non-zero. A second signal ends the program at once (status 130).",
     after_help = "Examples:
   slope-eval tests/recordings/ramp16                       # table: paper method
   slope-eval tests/recordings/* --method all               # the three methods side by side
-  slope-eval REC --json | jq .summary                      # one JSON object per recording and method
-  slope-eval REC --config slope.toml --seed 7              # [estimator] of a config file, another seed
+  slope-eval REC --json | jq .summary                      # a JSON line per recording and method
+  slope-eval REC --config slope.toml --seed 7              # a file's [estimator], another seed
   slope-eval REC --preset paper-literal                    # the paper as written (slow)
   slope-eval REC --render out/ --render-frame 12           # overlay PNG of frame 12
   slope-eval REC --render out/ --render-every 10 --export-ply out/   # every 10th frame, PNG and PLY

@@ -41,6 +41,38 @@ fn help_names_the_program_and_shows_examples() {
     }
 }
 
+/// Every example in --help is one line at 100 columns (a wrapped comment
+/// would read as a command of its own); every program's help, the ones
+/// without --service-prefix too.
+#[test]
+fn help_examples_fit_on_one_line_each() {
+    let others = [
+        ("slope-eval", env!("CARGO_BIN_EXE_slope-eval")),
+        ("slope-convert", env!("CARGO_BIN_EXE_slope-convert")),
+    ];
+    for (name, bin) in BINARIES.into_iter().chain(others) {
+        let output = Command::new(bin)
+            .arg("--help")
+            .env("COLUMNS", "100")
+            .output()
+            .unwrap_or_else(|e| panic!("cannot run {bin}: {e}"));
+        let stdout = String::from_utf8_lossy(&output.stdout);
+        let examples: Vec<&str> = stdout
+            .lines()
+            .skip_while(|l| *l != "Examples:")
+            .skip(1)
+            .take_while(|l| !l.is_empty())
+            .collect();
+        assert!(!examples.is_empty(), "{name}: no examples in\n{stdout}");
+        for line in examples {
+            assert!(
+                line.starts_with("  slope-") && line.len() <= 100,
+                "{name}: a wrapped or overlong example line: {line:?}"
+            );
+        }
+    }
+}
+
 #[test]
 fn unknown_flags_fail_with_a_message() {
     for (name, bin) in BINARIES {
