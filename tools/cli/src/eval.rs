@@ -102,7 +102,7 @@ pub struct EvalArgs {
     pub method: Option<MethodChoice>,
 
     /// TOML file with estimator parameters (see the pipeline README);
-    /// missing keys keep the paper's defaults.
+    /// missing keys keep our defaults (those of --preset default).
     #[arg(long)]
     pub config: Option<PathBuf>,
 

@@ -73,6 +73,14 @@ fn help_examples_fit_on_one_line_each() {
     }
 }
 
+/// The usage and flag texts that once said something else.
+#[test]
+fn help_texts_match_what_the_programs_do() {
+    let (_, eval, _) = run(env!("CARGO_BIN_EXE_slope-eval"), &["--help"]);
+    assert!(!eval.contains("paper's defaults"), "{eval}");
+    assert!(eval.contains("missing keys keep our"), "{eval}");
+}
+
 #[test]
 fn unknown_flags_fail_with_a_message() {
     for (name, bin) in BINARIES {
