@@ -34,8 +34,13 @@ pub fn bundled_recording() -> PathBuf {
     std::fs::canonicalize(&path).unwrap_or(path)
 }
 
+/// `--service-prefix` of the demo: it reads no config file.
+const DEMO_PREFIX_HELP: &str = "Prefix of the iceoryx2 service names the demo's processes \
+share; the demo adds -demo-<pid> to it, so that it never meets a running stack. Default: \"slope\"";
+
 #[derive(Debug, Parser)]
 #[command(
+    mut_arg("service_prefix", |arg| arg.help(DEMO_PREFIX_HELP)),
     name = "slope-demo",
     version,
     about = "Run replay -> estimator -> subscriber on a recording and compare with its ground truth",

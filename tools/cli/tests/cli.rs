@@ -76,6 +76,14 @@ fn help_examples_fit_on_one_line_each() {
 /// The usage and flag texts that once said something else.
 #[test]
 fn help_texts_match_what_the_programs_do() {
+    let (_, demo, _) = run(env!("CARGO_BIN_EXE_slope-demo"), &["--help"]);
+    let prefix = demo
+        .split("--service-prefix <SERVICE_PREFIX>")
+        .nth(1)
+        .and_then(|rest| rest.split("[env: SLOPE_SERVICE_PREFIX").next())
+        .unwrap_or_else(|| panic!("no --service-prefix in {demo}"));
+    assert!(prefix.contains("-demo-<pid>"), "{prefix}");
+    assert!(!prefix.contains("config file"), "{prefix}");
     let (_, eval, _) = run(env!("CARGO_BIN_EXE_slope-eval"), &["--help"]);
     assert!(!eval.contains("paper's defaults"), "{eval}");
     assert!(eval.contains("missing keys keep our"), "{eval}");
