@@ -26,6 +26,8 @@ use crate::mcap_export::{McapExporter, McapFrame};
 #[command(
     group = clap::ArgGroup::new("out").required(true).args(["output", "output_positional"]),
     name = "slope-convert",
+    // The derived usage puts the required output group before RECORDING.
+    override_usage = "slope-convert [OPTIONS] <RECORDING> --output <FILE>",
     version,
     about = "Convert a recording into an MCAP file (Foxglove, ROS 2 tooling): depth, cloud, estimates",
     long_about = "Writes OUT.mcap with, per frame of RECORDING, the depth image \

@@ -76,6 +76,11 @@ fn help_examples_fit_on_one_line_each() {
 /// The usage and flag texts that once said something else.
 #[test]
 fn help_texts_match_what_the_programs_do() {
+    let (_, convert, _) = run(env!("CARGO_BIN_EXE_slope-convert"), &["--help"]);
+    assert!(
+        convert.contains("Usage: slope-convert [OPTIONS] <RECORDING> --output <FILE>\n"),
+        "{convert}"
+    );
     let (_, demo, _) = run(env!("CARGO_BIN_EXE_slope-demo"), &["--help"]);
     let prefix = demo
         .split("--service-prefix <SERVICE_PREFIX>")
