@@ -126,6 +126,14 @@ fn bad_values_are_refused() {
     let (ok, _, stderr) = run(echo, &["--service-prefix", ""]);
     assert!(!ok);
     assert!(stderr.contains("service prefix is empty"), "{stderr}");
+    let eval = env!("CARGO_BIN_EXE_slope-eval");
+    let (ok, _, stderr) = run(eval, &["REC", "--render", "out", "--render-every", "0"]);
+    assert!(!ok);
+    assert!(
+        stderr.contains("--render-every <N>': must be at least 1 (1 renders every frame"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("18446744073709551615"), "{stderr}");
 }
 
 /// A user's error is printed once, a line per cause, and never with a
