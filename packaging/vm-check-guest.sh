@@ -39,11 +39,14 @@ slow_watchdog_off() {
         systemctl daemon-reload && systemctl restart $unit
     fi
 }
-# feed COUNT: slope-replay (as slope, the prefix from /etc/default/slope) until
-# slope-echo (as slope, outside the unit) has COUNT estimates; prints them.
+# feed COUNT: slope-replay (as slope, the prefix the units use: service_prefix
+# in /etc/slope/slope.toml, else "slope") until slope-echo (as slope, outside
+# the unit) has COUNT estimates; prints them.
 feed() {
     local count=$1 prefix
-    prefix=$(. /etc/default/slope && echo "${SLOPE_SERVICE_PREFIX:-slope}")
+    prefix=$(sed -n 's/^[[:space:]]*service_prefix[[:space:]]*=[[:space:]]*"\([^"]*\)".*/\1/p' \
+        /etc/slope/slope.toml | head -n 1)
+    prefix=${prefix:-slope}
     local restarts
     restarts=$(prop $unit NRestarts)
     runuser -u slope -- slope-echo --service-prefix "$prefix" --json --count "$count" --timeout-s 120 \

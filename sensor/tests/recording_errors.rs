@@ -118,8 +118,13 @@ fn unreadable_toml_is_reported() {
     let dir = base(&tmp);
     edit(&dir, "recording.toml", "[depth]", "[depth");
     let err = open_err(&dir);
-    assert!(matches!(err, RecordingError::Toml { .. }), "{err}");
-    assert_names(&err, &["recording.toml"]);
+    assert!(
+        matches!(err, RecordingError::Toml { at: Some(_), .. }),
+        "{err}"
+    );
+    assert_names(&err, &["recording.toml", "not valid TOML: "]);
+    // One line: the parser's message, not its source snippet.
+    assert!(!err.to_string().contains('\n'), "{err}");
 }
 
 #[test]

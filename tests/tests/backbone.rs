@@ -386,6 +386,10 @@ fn demo_runs_the_chain_and_summarises_against_truth() {
         .unwrap_or_else(|| panic!("no summary in {lines:#?}"));
     let frame_lines = lines.iter().filter(|l| l.starts_with("frame")).count();
     assert_eq!(frame_lines, 10, "one line per frame: {lines:#?}");
+    assert!(
+        summary.starts_with("summary: 10 estimates of a 10-frame recording ("),
+        "{summary}"
+    );
     let error: f64 = summary
         .split("|error| ")
         .nth(1)

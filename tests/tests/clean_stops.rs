@@ -2,7 +2,8 @@
 //! were waiting for data or streaming it (a signal that interrupts an
 //! iceoryx2 wait is a stop request, not an error), and what they were
 //! writing stays valid: slope-record's and slope-synth's recordings open,
-//! slope-eval and slope-demo report what they did so far. (The replay,
+//! slope-eval and slope-demo report what they did so far, slope-convert
+//! finishes its MCAP file with the frames converted so far. (The replay,
 //! estimator and echo: backbone.rs and silent_waits.rs.)
 
 use std::path::Path;
@@ -71,10 +72,18 @@ fn a_streaming_demo_stops_cleanly_with_its_summary() {
     while let Some(line) = demo.stdout_line(deadline(1.0)) {
         rest.push(line);
     }
-    assert!(
-        rest.iter().any(|l| l.starts_with("summary:")),
-        "no summary after the stop: {rest:?}"
-    );
+    let summary = rest
+        .iter()
+        .find(|l| l.starts_with("summary:"))
+        .unwrap_or_else(|| panic!("no summary after the stop: {rest:?}"));
+    // At least the estimate seen before the stop; the recording's length
+    // (the demo does not know how many frames the replay published).
+    let estimates: usize = summary
+        .strip_prefix("summary: ")
+        .and_then(|rest| rest.split(" estimates of a 10-frame recording").next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("unexpected summary {summary:?}"));
+    assert!((1..=10).contains(&estimates), "{summary}");
 }
 
 /// Rows of frames.csv under `dir` (0 while it does not exist yet).
@@ -200,7 +209,10 @@ fn a_waiting_demo_stops_cleanly_with_an_empty_summary() {
             .iter()
             .find(|l| l.starts_with("summary:"))
             .unwrap_or_else(|| panic!("no summary after the stop: {rest:?}"));
-        assert!(summary.contains(" 0 estimates"), "{summary}");
+        assert!(
+            summary.starts_with("summary: 0 estimates of a 10-frame recording"),
+            "{summary}"
+        );
     }
 }
 
@@ -321,5 +333,70 @@ fn a_synthesis_stops_cleanly_with_a_valid_recording() {
             .iter()
             .any(|l| l.contains("interrupted") && l.contains(&format!("frames={frames} ")));
         assert!(noted, "{}", synth.diagnostics());
+    }
+}
+
+/// Numbers N and M of the "interrupted after N of M frames" in `note`.
+fn interrupted_counts(note: &str) -> Option<(usize, usize)> {
+    let rest = note.split("interrupted after ").nth(1)?;
+    let (done, rest) = rest.split_once(" of ")?;
+    let total = rest.split(" frames").next()?;
+    Some((done.parse().ok()?, total.parse().ok()?))
+}
+
+/// slope-convert stopped mid-run (after its first frame, logged at debug):
+/// status 0, and the output, which until then still held the previous
+/// file's bytes, is now a finished MCAP file with one depth image, cloud
+/// and estimate per frame converted, as many as "interrupted after N of M
+/// frames" says; no temporary file is left beside it.
+#[test]
+fn a_conversion_stops_cleanly_with_a_valid_mcap_file() {
+    let dir = recording("ramp16");
+    for signal in [Signal::SIGINT, Signal::SIGTERM] {
+        let out_dir = tempfile::tempdir().expect("temp dir");
+        let out = out_dir.path().join("ramp16.mcap");
+        let previous = b"the previous conversion";
+        std::fs::write(&out, previous).expect("write the previous file");
+        let mut convert = Proc::spawn(
+            "slope-convert",
+            [
+                dir.to_str().expect("utf-8 path"),
+                "-o",
+                out.to_str().expect("utf-8 path"),
+                "-v",
+            ],
+        );
+        let line = convert.wait_stderr("frame converted", deadline(60.0));
+        assert!(line.is_some(), "{}", convert.diagnostics());
+        // Written elsewhere until finished: the old file is still there.
+        assert_eq!(std::fs::read(&out).expect("the output"), previous);
+        convert.signal(signal);
+        convert.assert_exits_zero_within(Duration::from_secs(10));
+        let stderr = convert.stderr_lines().join("\n");
+        let (done, total) = stderr
+            .lines()
+            .find_map(interrupted_counts)
+            .unwrap_or_else(|| panic!("no \"interrupted after\" note\n{stderr}"));
+        assert_eq!(total, 30, "{stderr}");
+        assert!(done >= 1 && done < total, "{stderr}");
+
+        let bytes = std::fs::read(&out).expect("the output");
+        let summary = mcap::Summary::read(&bytes)
+            .expect("a finished MCAP file")
+            .expect("with a summary");
+        let stats = summary.stats.expect("with statistics");
+        // Three messages per frame: depth, cloud, estimate.
+        assert_eq!(stats.message_count, 3 * done as u64, "{stderr}");
+        let mut depth = 0;
+        for message in mcap::MessageStream::new(&bytes).expect("an MCAP file") {
+            let message = message.expect("a message");
+            depth += usize::from(message.channel.topic == "/slope/depth");
+        }
+        assert_eq!(depth, done, "{stderr}");
+        let left: Vec<_> = std::fs::read_dir(out_dir.path())
+            .expect("the output directory")
+            .map(|entry| entry.expect("an entry").file_name())
+            .collect();
+        assert_eq!(left, [std::ffi::OsString::from("ramp16.mcap")]);
     }
 }

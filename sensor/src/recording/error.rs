@@ -37,12 +37,14 @@ pub enum RecordingError {
         source: io::Error,
     },
 
-    /// `recording.toml` is not valid TOML.
-    #[error("{} is not valid TOML", path.display())]
+    /// `recording.toml` is not valid TOML: the parser's message on one line,
+    /// and where (1-based line and column) when the parser says.
+    #[error("{}{} is not valid TOML: {message}", path.display(), at_line_column(*.at))]
     Toml {
         path: PathBuf,
-        #[source]
-        source: Box<toml::de::Error>,
+        /// Line and column, 1-based.
+        at: Option<(usize, usize)>,
+        message: String,
     },
 
     /// `format` is not `"slope-recording"`.
@@ -180,7 +182,38 @@ pub enum RecordingError {
     NoTruthColumn { path: PathBuf, row: usize },
 }
 
+/// " line L, column C", or nothing.
+fn at_line_column(at: Option<(usize, usize)>) -> String {
+    at.map_or(String::new(), |(line, column)| {
+        format!(" line {line}, column {column}")
+    })
+}
+
 impl RecordingError {
+    /// A `toml` parse error of `text` (the contents of `path`) as one line:
+    /// the parser's message without its source snippet, with the line and
+    /// column of its span.
+    pub(crate) fn toml(path: &std::path::Path, text: &str, err: &toml::de::Error) -> Self {
+        let at = err.span().map(|span| {
+            let before = &text[..span.start.min(text.len())];
+            let line = before.matches('\n').count() + 1;
+            let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+            (line, before[line_start..].chars().count() + 1)
+        });
+        let message = err
+            .message()
+            .lines()
+            .map(str::trim)
+            .filter(|part| !part.is_empty())
+            .collect::<Vec<_>>()
+            .join("; ");
+        Self::Toml {
+            path: path.to_path_buf(),
+            at,
+            message,
+        }
+    }
+
     /// The `frames.csv` line the error is about, if it is about one frame.
     pub fn row(&self) -> Option<usize> {
         match self {

@@ -95,10 +95,7 @@ impl TruthInfo {
 /// Parses the text of `recording.toml`; `path` is only used in errors.
 /// Unknown keys are ignored.
 pub(crate) fn parse_meta(text: &str, path: &Path) -> Result<RecordingMeta, RecordingError> {
-    let root: Table = toml::from_str(text).map_err(|source| RecordingError::Toml {
-        path: path.to_path_buf(),
-        source: Box::new(source),
-    })?;
+    let root: Table = toml::from_str(text).map_err(|err| RecordingError::toml(path, text, &err))?;
     let keys = Keys { path };
 
     match root.get("format") {
@@ -396,6 +393,36 @@ mod tests {
         let mount = meta.mount.to_mount();
         assert!(mount.height_m.is_nan() && mount.roll_deg.is_nan());
         assert_eq!(mount.pitch_deg, -20.0);
+    }
+
+    /// A broken file is one line (no cause, no snippet): the file, where,
+    /// and the parser's message.
+    #[test]
+    fn invalid_toml_is_one_line_naming_file_line_and_column() {
+        let text = "format = \"slope-recording\"\nversion = 1\n[depth\nfx = 1.0\n";
+        let err = parse_meta(text, Path::new("rec/recording.toml")).unwrap_err();
+        assert!(
+            matches!(
+                err,
+                RecordingError::Toml {
+                    at: Some((3, _)),
+                    ..
+                }
+            ),
+            "{err:?}"
+        );
+        let message = err.to_string();
+        assert!(!message.contains('\n'), "{message:?}");
+        assert!(
+            message.starts_with("rec/recording.toml line 3, column "),
+            "{message}"
+        );
+        assert!(message.contains("is not valid TOML: "), "{message}");
+        assert!(std::error::Error::source(&err).is_none());
+        let err = parse_meta("version = 1\n  bad key = 2\n", Path::new("r.toml")).unwrap_err();
+        let message = err.to_string();
+        assert!(message.starts_with("r.toml line 2, column 7"), "{message}");
+        assert!(!message.contains('\n'), "{message:?}");
     }
 
     #[test]

@@ -29,14 +29,14 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
-use slope_ipc_types::{Mount, DEFAULT_SERVICE_PREFIX};
+use slope_ipc_types::DEFAULT_SERVICE_PREFIX;
 use slope_pipeline::config::ConfigError;
 use slope_pipeline::EstimatorConfig;
 use slope_sensor::recording::MountInfo;
 
 use crate::cli::prefix_arg;
 use crate::health::DEFAULT_HEALTH_INTERVAL_S;
-use crate::mount_args::check_mount;
+use crate::mount_args::check_mount_info;
 use crate::replay::POSITIVE_RANGE;
 
 /// The file the daemons read when not given `--config`, if it exists (the
@@ -142,12 +142,17 @@ pub enum ConfigFileError {
         #[source]
         source: Box<ConfigFileError>,
     },
-    #[error("not TOML (line {line}): {message}")]
-    Syntax { line: usize, message: String },
-    #[error("`{key}` (line {line}): {message}")]
+    #[error("not TOML{}: {message}", at_line(*.line))]
+    Syntax {
+        /// 1-based; `None` when the parser did not say.
+        line: Option<usize>,
+        message: String,
+    },
+    #[error("`{key}`{}: {message}", at_line(*.line))]
     Key {
         key: String,
-        line: usize,
+        /// 1-based; `None` when it is not known.
+        line: Option<usize>,
         message: String,
     },
     #[error("`{key}` belongs to the estimator: {fix}")]
@@ -158,6 +163,20 @@ pub enum ConfigFileError {
         value: String,
         range: String,
     },
+    /// Two keys that must be in order, each named with its value (either
+    /// may be the one the user set).
+    #[error("`{high_key}` = {high} must be above `{low_key}` = {low}")]
+    NotAbove {
+        high_key: String,
+        high: String,
+        low_key: String,
+        low: String,
+    },
+}
+
+/// " (line N)", or nothing for an unknown line.
+fn at_line(line: Option<usize>) -> String {
+    line.map_or(String::new(), |line| format!(" (line {line})"))
 }
 
 /// The top-level keys of [`EstimatorConfig`], which live under `[estimator]`.
@@ -178,10 +197,10 @@ impl SlopeFile {
     /// Parses and validates a file's text; missing keys keep their defaults.
     pub fn from_toml_str(text: &str) -> Result<Self, ConfigFileError> {
         let table: toml::Table = toml::from_str(text).map_err(|e| ConfigFileError::Syntax {
-            line: e.span().map_or(0, |span| line_of(text, span.start)),
+            line: e.span().map(|span| line_of(text, span.start)),
             message: e.message().to_string(),
         })?;
-        check_layout(&table)?;
+        check_layout(text, &table)?;
         let file: Self = toml::from_str(text).map_err(|e| key_error(text, &e))?;
         file.validate()?;
         Ok(file)
@@ -238,50 +257,18 @@ impl SlopeFile {
                 }
             }
             ConfigError::Parse(e) => ConfigFileError::Syntax {
-                line: 0,
+                line: None,
                 message: e.to_string(),
             },
         })
     }
 
     fn validate_mount(&self) -> Result<(), ConfigFileError> {
-        let m = &self.mount;
-        let unknown = Mount::UNKNOWN;
-        for (key, value, alone) in [
-            (
-                "height_m",
-                m.height_m,
-                Mount {
-                    height_m: m.height_m.unwrap_or(f64::NAN),
-                    ..unknown
-                },
-            ),
-            (
-                "pitch_deg",
-                m.pitch_deg,
-                Mount {
-                    pitch_deg: m.pitch_deg.unwrap_or(f64::NAN),
-                    ..unknown
-                },
-            ),
-            (
-                "roll_deg",
-                m.roll_deg,
-                Mount {
-                    roll_deg: m.roll_deg.unwrap_or(f64::NAN),
-                    ..unknown
-                },
-            ),
-        ] {
-            if let (Some(value), Err(range)) = (value, check_mount(&alone)) {
-                return Err(ConfigFileError::OutOfRange {
-                    key: format!("mount.{key}"),
-                    value: value.to_string(),
-                    range,
-                });
-            }
-        }
-        Ok(())
+        check_mount_info(&self.mount).map_err(|(key, value, range)| ConfigFileError::OutOfRange {
+            key: format!("mount.{key}"),
+            value: value.to_string(),
+            range,
+        })
     }
 }
 
@@ -302,22 +289,27 @@ impl CaptureSection {
                 format!("must be one of {}", PIPELINES.join(", ")),
             );
         }
-        if !(self.min_depth_m >= min && self.min_depth_m < self.max_depth_m) {
+        if !(self.min_depth_m >= min && self.min_depth_m <= max) {
             return bad(
                 "min_depth_m",
                 self.min_depth_m.to_string(),
-                format!(
-                    "must be at least {min} m and below max_depth_m ({})",
-                    self.max_depth_m
-                ),
+                format!("must be from {min} to {max} m, below max_depth_m"),
             );
         }
-        if self.max_depth_m.is_nan() || self.max_depth_m > max {
+        if !(self.max_depth_m >= min && self.max_depth_m <= max) {
             return bad(
                 "max_depth_m",
                 self.max_depth_m.to_string(),
-                format!("must be above min_depth_m and at most {max} m"),
+                format!("must be from {min} to {max} m, above min_depth_m"),
             );
+        }
+        if self.max_depth_m <= self.min_depth_m {
+            return Err(ConfigFileError::NotAbove {
+                high_key: "capture.max_depth_m".into(),
+                high: self.max_depth_m.to_string(),
+                low_key: "capture.min_depth_m".into(),
+                low: self.min_depth_m.to_string(),
+            });
         }
         if !(min..=max).contains(&self.frame_timeout_s) {
             return bad(
@@ -355,11 +347,11 @@ pub fn config_path(given: Option<&Path>, default: &Path) -> Option<PathBuf> {
 }
 
 /// A file laid out before the sections existed: how to fix it.
-fn check_layout(table: &toml::Table) -> Result<(), ConfigFileError> {
+fn check_layout(text: &str, table: &toml::Table) -> Result<(), ConfigFileError> {
     if table.contains_key("kinect2") {
         return Err(ConfigFileError::Key {
             key: "kinect2".into(),
-            line: 0,
+            line: first_line_of(text, "kinect2"),
             message:
                 "the capture settings are the section [capture]: rename [kinect2] to [capture]"
                     .into(),
@@ -383,13 +375,44 @@ fn check_layout(table: &toml::Table) -> Result<(), ConfigFileError> {
 fn key_error(text: &str, err: &toml::de::Error) -> ConfigFileError {
     let message = err.message().to_string();
     let Some(span) = err.span() else {
-        return ConfigFileError::Syntax { line: 0, message };
+        return ConfigFileError::Syntax {
+            line: None,
+            message,
+        };
     };
     ConfigFileError::Key {
         key: key_path(text, &span),
-        line: line_of(text, span.start),
+        line: Some(line_of(text, span.start)),
         message,
     }
+}
+
+/// The 1-based line where the top-level `key` first appears: a table
+/// header (`[key]`, `[key.sub]`, `[[key]]`) or a key at the top (`key = `,
+/// `key.sub = `, before any header). `None` if it is written some other
+/// way (quoted, say).
+fn first_line_of(text: &str, key: &str) -> Option<usize> {
+    let mut top = true;
+    for (k, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if let Some(header) = line.strip_prefix('[') {
+            let header = header.trim_start_matches('[').trim_start();
+            if header
+                .strip_prefix(key)
+                .is_some_and(|rest| rest.trim_start().starts_with([']', '.']))
+            {
+                return Some(k + 1);
+            }
+            top = false;
+        } else if top
+            && line
+                .strip_prefix(key)
+                .is_some_and(|rest| rest.trim_start().starts_with(['=', '.']))
+        {
+            return Some(k + 1);
+        }
+    }
+    None
 }
 
 /// The 1-based line holding byte `at`.
@@ -513,6 +536,21 @@ mod tests {
                 "above 0",
             ),
             (
+                "[mount]\nheight_m = nan\n",
+                "`mount.height_m` = NaN",
+                "above 0",
+            ),
+            (
+                "[mount]\nheight_m = 0.4\npitch_deg = nan\n",
+                "`mount.pitch_deg` = NaN",
+                "at most 90",
+            ),
+            (
+                "[mount]\nroll_deg = -inf\n",
+                "`mount.roll_deg` = -inf",
+                "at most 180",
+            ),
+            (
                 "[health]\ninterval_s = 0.01\n",
                 "`health.interval_s` = 0.01",
                 "from 0.05 to 3600",
@@ -523,14 +561,19 @@ mod tests {
                 "one of default, cpu",
             ),
             (
-                "[capture]\nmin_depth_m = 5.0\n",
-                "`capture.min_depth_m` = 5",
-                "below max_depth_m (4.5)",
+                "[capture]\nmin_depth_m = 0.0\n",
+                "`capture.min_depth_m` = 0",
+                "from 0.001 to 10000000 m",
             ),
             (
                 "[capture]\nmax_depth_m = inf\n",
                 "`capture.max_depth_m` = inf",
-                "at most 10000000",
+                "from 0.001 to 10000000 m",
+            ),
+            (
+                "[capture]\nmax_depth_m = nan\n",
+                "`capture.max_depth_m` = NaN",
+                "from 0.001 to 10000000 m",
             ),
             (
                 "[capture]\nframe_timeout_s = 0.0\n",
@@ -559,6 +602,30 @@ mod tests {
         }
     }
 
+    /// Whichever of the two keys was set, the message names both with
+    /// their values.
+    #[test]
+    fn keys_out_of_order_are_both_named() {
+        for text in [
+            "[capture]\nmax_depth_m = 0.2\n",
+            "[capture]\nmin_depth_m = 0.5\nmax_depth_m = 0.2\n",
+        ] {
+            assert_eq!(
+                refused(text),
+                "`capture.max_depth_m` = 0.2 must be above `capture.min_depth_m` = 0.5",
+                "{text}"
+            );
+        }
+        assert_eq!(
+            refused("[capture]\nmin_depth_m = 5.0\n"),
+            "`capture.max_depth_m` = 4.5 must be above `capture.min_depth_m` = 5"
+        );
+        assert_eq!(
+            refused("[capture]\nmin_depth_m = 2.0\nmax_depth_m = 2.0\n"),
+            "`capture.max_depth_m` = 2 must be above `capture.min_depth_m` = 2"
+        );
+    }
+
     #[test]
     fn an_old_layout_says_how_to_fix_it() {
         let message = refused("method = \"tls\"\n");
@@ -575,9 +642,18 @@ mod tests {
         );
         let message = refused("[kinect2]\nserial = \"1\"\n");
         assert!(
-            message.contains("rename [kinect2] to [capture]"),
+            message.starts_with("`kinect2` (line 1): ")
+                && message.contains("rename [kinect2] to [capture]"),
             "{message}"
         );
+        let message = refused("# the camera\n\n[kinect2.more]\nserial = \"1\"\n");
+        assert!(message.starts_with("`kinect2` (line 3): "), "{message}");
+        let message = refused("service_prefix = \"x\"\nkinect2.serial = \"1\"\n");
+        assert!(message.starts_with("`kinect2` (line 2): "), "{message}");
+        // Quoted: found by the parser, not by the line scan; no line then.
+        let message = refused("[\"kinect2\"]\nserial = \"1\"\n");
+        assert!(message.starts_with("`kinect2`: "), "{message}");
+        assert!(!message.contains("line 0"), "{message}");
     }
 
     #[test]

@@ -1,6 +1,12 @@
 //! `slope-convert RECORDING OUT.mcap`: a recording as an MCAP file that
 //! Foxglove opens: per frame the depth image, the cloud and the estimate
 //! (the estimator run in this process, as `slope-eval` does).
+//!
+//! The file is written under a temporary name beside OUT.mcap and renamed
+//! over it once finished: a failed run leaves a previous OUT.mcap as it
+//! was. SIGINT/SIGTERM stop the conversion after the frame under way; the
+//! frames converted so far are then finished into OUT.mcap, a valid file,
+//! and the run says "interrupted after N of M frames" ([`Interruption`]).
 
 use std::path::{Path, PathBuf};
 
@@ -10,6 +16,8 @@ use slope_ipc_types::{CloudPoint, SlopeEstimate};
 use slope_pipeline::{CloudView, Estimator, FrameInfo};
 use slope_sensor::recording::{DepthImage, Recording};
 
+use slope_sensor::publish::StopFlag;
+
 use crate::cli::{max_frames_arg, LogArgs};
 use crate::estimator::{load_config, method_arg};
 use crate::mcap_export::{McapExporter, McapFrame};
@@ -18,13 +26,20 @@ use crate::mcap_export::{McapExporter, McapFrame};
 #[command(
     group = clap::ArgGroup::new("out").required(true).args(["output", "output_positional"]),
     name = "slope-convert",
+    // The derived usage puts the required output group before RECORDING.
+    override_usage = "slope-convert [OPTIONS] <RECORDING> --output <FILE>",
     version,
     about = "Convert a recording into an MCAP file (Foxglove, ROS 2 tooling): depth, cloud, estimates",
     long_about = "Writes OUT.mcap with, per frame of RECORDING, the depth image \
 (/slope/depth, foxglove.RawImage, 16UC1), the point cloud (/slope/cloud, foxglove.PointCloud: x, y, \
 z float32 and rgb) and the slope estimate (/slope/estimate, JSON with schema \
 slope.estimate.json/1: the keys of slope-echo --json), every channel JSON with a JSON Schema. \
-The estimates come from the estimator run here on each frame (--no-estimates leaves them out).",
+The estimates come from the estimator run here on each frame (--no-estimates leaves them out).
+
+OUT.mcap is written under a temporary name in its directory and renamed into place when finished: \
+a run that fails leaves an existing OUT.mcap as it was. SIGINT or SIGTERM (Ctrl-C) stops the \
+conversion after the frame under way: OUT.mcap then holds the frames converted so far, as a \
+finished file, the run says \"interrupted after N of M frames\" and exits with status 0.",
     after_help = "Examples:
   slope-convert tests/recordings/ramp16 -o ramp16.mcap     # then open ramp16.mcap in Foxglove
   slope-convert REC -o out.mcap --method tls --max-frames 10
@@ -34,7 +49,7 @@ pub struct ConvertArgs {
     /// The recording directory (holds recording.toml and frames.csv).
     pub recording: PathBuf,
 
-    /// The MCAP file to write (replaced if it exists).
+    /// The MCAP file to write (replaced, once finished, if it exists).
     #[arg(short = 'o', long = "output", value_name = "FILE")]
     pub output: Option<PathBuf>,
 
@@ -77,15 +92,39 @@ impl ConvertArgs {
     }
 }
 
+/// How far a conversion got before SIGINT/SIGTERM stopped it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Interruption {
+    /// Frames read (written or skipped as bad).
+    pub frames_done: usize,
+    /// Frames the run was asked to convert.
+    pub frames_total: usize,
+}
+
+impl std::fmt::Display for Interruption {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "interrupted after {} of {} frames",
+            self.frames_done, self.frames_total
+        )
+    }
+}
+
 /// What was written.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct ConvertStats {
     pub frames: u64,
     pub estimates: u64,
     pub bad_frames: u64,
+    /// Set when a signal stopped the run before every frame was converted.
+    pub interrupted: Option<Interruption>,
 }
 
-pub fn run(args: &ConvertArgs) -> anyhow::Result<ConvertStats> {
+/// Converts the recording of `args` into its output file. When `stop` is
+/// set, the run ends after the frame under way and finishes the file with
+/// the frames converted so far.
+pub fn run(args: &ConvertArgs, stop: &StopFlag) -> anyhow::Result<ConvertStats> {
     let recording = Recording::open(&args.recording)
         .with_context(|| format!("cannot convert {}", args.recording.display()))?;
     let config =
@@ -97,10 +136,18 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<ConvertStats> {
     let projector = recording.projector();
     let mut depth = DepthImage::default();
     let mut points = vec![CloudPoint::INVALID; projector.len()];
-    let mut exporter = McapExporter::create(args.output())?;
+    let mut exporter = McapExporter::create_replacing(args.output())?;
     let limit = args.max_frames.map_or(usize::MAX, |m| m as usize);
+    let total = recording.frames().len().min(limit);
     let mut stats = ConvertStats::default();
-    for frame in recording.frames().iter().take(limit) {
+    for (done, frame) in recording.frames().iter().take(limit).enumerate() {
+        if stop.is_stopped() {
+            stats.interrupted = Some(Interruption {
+                frames_done: done,
+                frames_total: total,
+            });
+            break;
+        }
         if let Err(err) = recording.read_depth_into(frame, &mut depth) {
             tracing::warn!(frame = frame.index, "skipping a bad frame: {err}");
             stats.bad_frames += 1;
@@ -139,8 +186,15 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<ConvertStats> {
         })?;
         stats.frames += 1;
         stats.estimates += u64::from(message.is_some());
+        tracing::debug!(frame = frame.index, "frame converted");
     }
     exporter.finish()?;
+    if let Some(interruption) = stats.interrupted {
+        tracing::warn!(
+            "{interruption}; {} holds the frames converted",
+            args.output().display()
+        );
+    }
     tracing::info!(
         output = %args.output().display(),
         frames = stats.frames,

@@ -34,8 +34,13 @@ pub fn bundled_recording() -> PathBuf {
     std::fs::canonicalize(&path).unwrap_or(path)
 }
 
+/// `--service-prefix` of the demo: it reads no config file.
+const DEMO_PREFIX_HELP: &str = "Prefix of the iceoryx2 service names the demo's processes \
+share; the demo adds -demo-<pid> to it, so that it never meets a running stack. Default: \"slope\"";
+
 #[derive(Debug, Parser)]
 #[command(
+    mut_arg("service_prefix", |arg| arg.help(DEMO_PREFIX_HELP)),
     name = "slope-demo",
     version,
     about = "Run replay -> estimator -> subscriber on a recording and compare with its ground truth",
@@ -149,7 +154,9 @@ impl Drop for ChildGuard {
 /// What the demo saw.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DemoSummary {
-    pub frames_published: usize,
+    /// Frames in the recording (the replay's children do not say how many
+    /// they published: a stopped demo may have replayed fewer).
+    pub recording_frames: usize,
     pub estimates: usize,
     pub ok: usize,
     pub median_slope_deg: Option<f64>,
@@ -312,7 +319,7 @@ pub fn run(args: &DemoArgs, stop: &StopFlag) -> anyhow::Result<DemoSummary> {
     let truth_deg = recording.meta().truth.slope_deg;
     let median_slope_deg = median(&mut slopes);
     let summary = DemoSummary {
-        frames_published: frame_count,
+        recording_frames: frame_count,
         estimates,
         ok,
         median_slope_deg,
@@ -336,9 +343,9 @@ pub fn run(args: &DemoArgs, stop: &StopFlag) -> anyhow::Result<DemoSummary> {
 fn print_summary(s: &DemoSummary) {
     let deg = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.2}°"));
     println!(
-        "summary: {} frames replayed, {} estimates ({} ok, {} dropped), median slope {}, truth {}, |error| {}, median latency {}",
-        s.frames_published,
+        "summary: {} estimates of a {}-frame recording ({} ok, {} dropped), median slope {}, truth {}, |error| {}, median latency {}",
         s.estimates,
+        s.recording_frames,
         s.ok,
         s.dropped,
         deg(s.median_slope_deg),

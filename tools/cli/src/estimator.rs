@@ -31,7 +31,7 @@ estimator on the newest frame and publishes one SlopeEstimate per processed fram
 arrive while a frame is being processed are superseded by the newest one and counted as dropped. \
 Stops cleanly on SIGINT or SIGTERM.",
     after_help = "Examples:
-  slope-estimator                              # settings from /etc/slope/slope.toml if it exists, else the defaults
+  slope-estimator                              # /etc/slope/slope.toml if present, else defaults
   slope-estimator --method tls                 # total-least-squares baseline
   slope-estimator --config slope.toml          # settings from another file
   slope-estimator --config slope.toml --print-config   # every setting in effect, then exit

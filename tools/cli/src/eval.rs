@@ -84,8 +84,8 @@ non-zero. A second signal ends the program at once (status 130).",
     after_help = "Examples:
   slope-eval tests/recordings/ramp16                       # table: paper method
   slope-eval tests/recordings/* --method all               # the three methods side by side
-  slope-eval REC --json | jq .summary                      # one JSON object per recording and method
-  slope-eval REC --config slope.toml --seed 7              # [estimator] of a config file, another seed
+  slope-eval REC --json | jq .summary                      # a JSON line per recording and method
+  slope-eval REC --config slope.toml --seed 7              # a file's [estimator], another seed
   slope-eval REC --preset paper-literal                    # the paper as written (slow)
   slope-eval REC --render out/ --render-frame 12           # overlay PNG of frame 12
   slope-eval REC --render out/ --render-every 10 --export-ply out/   # every 10th frame, PNG and PLY
@@ -102,7 +102,7 @@ pub struct EvalArgs {
     pub method: Option<MethodChoice>,
 
     /// TOML file with estimator parameters (see the pipeline README);
-    /// missing keys keep the paper's defaults.
+    /// missing keys keep our defaults (those of --preset default).
     #[arg(long)]
     pub config: Option<PathBuf>,
 
@@ -140,7 +140,7 @@ pub struct EvalArgs {
 
     /// Render and export every Nth evaluated frame (the first, the N+1th,
     /// ...) instead of one.
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    #[arg(long, value_name = "N", value_parser = render_every_arg)]
     pub render_every: Option<u64>,
 
     /// Write the cloud of the rendered frame(s) as PLY into DIR (plane
@@ -495,6 +495,19 @@ pub fn frame_result(index: u64, truth_deg: Option<f64>, estimate: &Estimate) -> 
         error: (estimate.status == EstimateStatus::BadFrame)
             .then(|| "the estimator rejected the cloud (size mismatch or empty)".to_string()),
         details: FrameDetails::of(estimate),
+    }
+}
+
+/// What `--render-every 0` answers.
+pub const RENDER_EVERY_ZERO: &str =
+    "must be at least 1 (1 renders every frame; leave the flag out for one frame)";
+
+/// `--render-every N`: at least 1.
+fn render_every_arg(text: &str) -> Result<u64, String> {
+    match text.parse::<u64>() {
+        Ok(0) => Err(RENDER_EVERY_ZERO.to_string()),
+        Ok(n) => Ok(n),
+        Err(_) => Err(format!("'{text}' is not a whole number")),
     }
 }
 

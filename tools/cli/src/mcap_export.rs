@@ -14,7 +14,7 @@
 use std::collections::BTreeMap;
 use std::fs::File;
 use std::io::BufWriter;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use base64::Engine;
@@ -131,13 +131,61 @@ pub struct McapExporter {
     estimate: u16,
     sequence: u32,
     path: String,
+    /// With [`McapExporter::create_replacing`]: the temporary file being
+    /// written and the path it becomes on [`McapExporter::finish`].
+    pending: Option<(tempfile::TempPath, PathBuf)>,
 }
 
 impl McapExporter {
-    /// Creates `path` with the three channels.
+    /// Creates `path` with the three channels and writes into it as it goes
+    /// (`slope-record`: what was written before a crash stays on disk).
     pub fn create(path: &Path) -> anyhow::Result<Self> {
         let name = path.display().to_string();
         let file = File::create(path).with_context(|| format!("cannot create {name}"))?;
+        Self::with_file(file, name, None)
+    }
+
+    /// Writes into a temporary file beside `path` that [`Self::finish`]
+    /// renames over `path` (`slope-convert`): until then a file already at
+    /// `path` is untouched, and a run that fails leaves nothing behind (the
+    /// temporary file is removed when the exporter is dropped).
+    pub fn create_replacing(path: &Path) -> anyhow::Result<Self> {
+        let name = path.display().to_string();
+        let dir = match path.parent() {
+            Some(dir) if !dir.as_os_str().is_empty() => dir,
+            _ => Path::new("."),
+        };
+        let prefix = format!(
+            ".{}.",
+            path.file_name().unwrap_or_default().to_string_lossy()
+        );
+        // 0o666 less the umask, as File::create gives (tempfile's default
+        // is 0o600).
+        #[cfg(unix)]
+        let permissions = {
+            use std::os::unix::fs::PermissionsExt;
+            std::fs::Permissions::from_mode(0o666)
+        };
+        let mut builder = tempfile::Builder::new();
+        builder.prefix(&prefix).suffix(".part");
+        #[cfg(unix)]
+        builder.permissions(permissions);
+        let temp = builder.tempfile_in(dir).with_context(|| {
+            format!(
+                "cannot create a temporary file for {name} in {}",
+                dir.display()
+            )
+        })?;
+        let (file, temp_path) = temp.into_parts();
+        Self::with_file(file, name, Some((temp_path, path.to_path_buf())))
+    }
+
+    /// Writes the header and the three channels into `file`.
+    fn with_file(
+        file: File,
+        name: String,
+        pending: Option<(tempfile::TempPath, PathBuf)>,
+    ) -> anyhow::Result<Self> {
         let mut writer = mcap::WriteOptions::new()
             .compression(None)
             .create(BufWriter::new(file))
@@ -161,6 +209,7 @@ impl McapExporter {
             estimate,
             sequence: 0,
             path: name,
+            pending,
         })
     }
 
@@ -250,11 +299,25 @@ impl McapExporter {
             .with_context(|| format!("cannot write a message into {}", self.path))
     }
 
-    /// Writes the summary and closes the file.
+    /// Writes the summary and closes the file (and, after
+    /// [`Self::create_replacing`], renames it over its path).
     pub fn finish(mut self) -> anyhow::Result<()> {
         self.writer
             .finish()
             .with_context(|| format!("cannot finish {}", self.path))?;
+        let file = self
+            .writer
+            .into_inner()
+            .into_inner()
+            .map_err(std::io::IntoInnerError::into_error)
+            .with_context(|| format!("cannot finish {}", self.path))?;
+        if let Some((temp, path)) = self.pending {
+            file.sync_all()
+                .with_context(|| format!("cannot finish {}", self.path))?;
+            temp.persist(&path)
+                .map_err(|e| e.error)
+                .with_context(|| format!("cannot rename the finished file to {}", self.path))?;
+        }
         Ok(())
     }
 }

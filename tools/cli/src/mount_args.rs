@@ -4,6 +4,7 @@
 
 use clap::Args;
 use slope_ipc_types::Mount;
+use slope_sensor::recording::MountInfo;
 
 /// Largest camera height accepted, metres.
 pub const MAX_HEIGHT_M: f64 = 10.0;
@@ -90,16 +91,18 @@ fn roll_deg(text: &str) -> Result<f64, String> {
     parse_in(text, ROLL)
 }
 
-/// Checks a mount from a file: each value unknown (NaN) or in the range the
-/// command line accepts.
-pub fn check_mount(mount: &Mount) -> Result<(), String> {
-    for (value, range) in [
-        (mount.height_m, HEIGHT),
-        (mount.pitch_deg, PITCH),
-        (mount.roll_deg, ROLL),
+/// Checks `[mount]` of a config file: every key given must be a finite
+/// value in the range the command line accepts (a key left out is unknown;
+/// `nan` is not a way to say so). The error is the first bad key
+/// (`height_m`, `pitch_deg` or `roll_deg`), its value and the reason.
+pub fn check_mount_info(mount: &MountInfo) -> Result<(), (&'static str, f64, String)> {
+    for (key, value, range) in [
+        ("height_m", mount.height_m, HEIGHT),
+        ("pitch_deg", mount.pitch_deg, PITCH),
+        ("roll_deg", mount.roll_deg, ROLL),
     ] {
-        if !value.is_nan() {
-            in_range(value, range)?;
+        if let Some(value) = value {
+            in_range(value, range).map_err(|reason| (key, value, reason))?;
         }
     }
     Ok(())
@@ -151,11 +154,51 @@ mod tests {
             assert!(parse(&args).is_err(), "{args:?} accepted");
         }
         assert!(parse(&["--mount-pitch-deg", "-90", "--mount-roll-deg", "180"]).is_ok());
-        assert!(check_mount(&Mount::UNKNOWN).is_ok());
-        let bad = Mount {
-            height_m: -1.0,
-            ..Mount::UNKNOWN
+    }
+
+    #[test]
+    fn a_file_mount_is_checked_like_the_flags_and_nan_is_refused() {
+        assert_eq!(check_mount_info(&MountInfo::default()), Ok(()));
+        let good = MountInfo {
+            height_m: Some(0.4),
+            pitch_deg: Some(-90.0),
+            roll_deg: Some(180.0),
         };
-        assert!(check_mount(&bad).unwrap_err().contains("height"));
+        assert_eq!(check_mount_info(&good), Ok(()));
+        for (mount, key) in [
+            (
+                MountInfo {
+                    height_m: Some(-1.0),
+                    ..MountInfo::default()
+                },
+                "height_m",
+            ),
+            (
+                MountInfo {
+                    height_m: Some(f64::NAN),
+                    ..MountInfo::default()
+                },
+                "height_m",
+            ),
+            (
+                MountInfo {
+                    height_m: Some(0.4),
+                    pitch_deg: Some(f64::NAN),
+                    ..MountInfo::default()
+                },
+                "pitch_deg",
+            ),
+            (
+                MountInfo {
+                    roll_deg: Some(f64::INFINITY),
+                    ..MountInfo::default()
+                },
+                "roll_deg",
+            ),
+        ] {
+            let (bad, _, reason) = check_mount_info(&mount).expect_err("refused");
+            assert_eq!(bad, key, "{mount:?}");
+            assert!(reason.contains("must be"), "{reason}");
+        }
     }
 }

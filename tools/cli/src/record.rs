@@ -87,7 +87,7 @@ color/*.png) from the cloud topic of a running source, or straight from the Kine
 is flushed as soon as its images are written, so a recording cut short stays readable. Stops at \
 --max-frames, --duration-s, when the topic goes quiet for --idle-timeout-s, or on Ctrl-C.",
     after_help = "Examples:
-  slope-record -o scene1                               # from the running slope-capture, until Ctrl-C
+  slope-record -o scene1                               # from the running capture, until Ctrl-C
   slope-record -o scene1 --max-frames 300              # ten seconds of a 30 Hz camera
   slope-record -o scene1 --source kinect --mount-pitch-deg -20 --mount-height-m 0.5
   slope-replay scene1                                  # ... and play it back later

@@ -36,6 +36,34 @@ fn run(bin: &str, args: &[&str]) -> String {
     String::from_utf8(out.stdout).expect("utf-8")
 }
 
+/// A conversion that fails (here: the recording does not exist) leaves a
+/// previous output file as it was and no temporary file beside it.
+#[test]
+fn a_failed_conversion_keeps_the_previous_output() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("ramp16.mcap");
+    std::fs::write(&out, b"the previous conversion").expect("write");
+    let missing = dir.path().join("no-such-recording");
+    let result = Command::new(CONVERT)
+        .args([
+            missing.to_str().expect("utf-8"),
+            "-o",
+            out.to_str().expect("utf-8"),
+        ])
+        .env_remove("RUST_LOG")
+        .output()
+        .expect("run");
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert!(!result.status.success(), "{stderr}");
+    assert!(stderr.contains("no-such-recording"), "{stderr}");
+    assert_eq!(
+        std::fs::read(&out).expect("the previous file"),
+        b"the previous conversion"
+    );
+    let entries = std::fs::read_dir(dir.path()).expect("dir").count();
+    assert_eq!(entries, 1, "only the previous file");
+}
+
 fn png_size(path: &Path) -> (u32, u32, Vec<u8>) {
     let decoder = png::Decoder::new(BufReader::new(File::open(path).expect("png")));
     let mut reader = decoder.read_info().expect("png header");

@@ -41,6 +41,59 @@ fn help_names_the_program_and_shows_examples() {
     }
 }
 
+/// Every example in --help is one line at 100 columns (a wrapped comment
+/// would read as a command of its own); every program's help, the ones
+/// without --service-prefix too.
+#[test]
+fn help_examples_fit_on_one_line_each() {
+    let others = [
+        ("slope-eval", env!("CARGO_BIN_EXE_slope-eval")),
+        ("slope-convert", env!("CARGO_BIN_EXE_slope-convert")),
+    ];
+    for (name, bin) in BINARIES.into_iter().chain(others) {
+        let output = Command::new(bin)
+            .arg("--help")
+            .env("COLUMNS", "100")
+            .output()
+            .unwrap_or_else(|e| panic!("cannot run {bin}: {e}"));
+        let stdout = String::from_utf8_lossy(&output.stdout);
+        let examples: Vec<&str> = stdout
+            .lines()
+            .skip_while(|l| *l != "Examples:")
+            .skip(1)
+            .take_while(|l| !l.is_empty())
+            .collect();
+        assert!(!examples.is_empty(), "{name}: no examples in\n{stdout}");
+        for line in examples {
+            assert!(
+                line.starts_with("  slope-") && line.len() <= 100,
+                "{name}: a wrapped or overlong example line: {line:?}"
+            );
+        }
+    }
+}
+
+/// The usage and flag texts that once said something else.
+#[test]
+fn help_texts_match_what_the_programs_do() {
+    let (_, convert, _) = run(env!("CARGO_BIN_EXE_slope-convert"), &["--help"]);
+    assert!(
+        convert.contains("Usage: slope-convert [OPTIONS] <RECORDING> --output <FILE>\n"),
+        "{convert}"
+    );
+    let (_, demo, _) = run(env!("CARGO_BIN_EXE_slope-demo"), &["--help"]);
+    let prefix = demo
+        .split("--service-prefix <SERVICE_PREFIX>")
+        .nth(1)
+        .and_then(|rest| rest.split("[env: SLOPE_SERVICE_PREFIX").next())
+        .unwrap_or_else(|| panic!("no --service-prefix in {demo}"));
+    assert!(prefix.contains("-demo-<pid>"), "{prefix}");
+    assert!(!prefix.contains("config file"), "{prefix}");
+    let (_, eval, _) = run(env!("CARGO_BIN_EXE_slope-eval"), &["--help"]);
+    assert!(!eval.contains("paper's defaults"), "{eval}");
+    assert!(eval.contains("missing keys keep our"), "{eval}");
+}
+
 #[test]
 fn unknown_flags_fail_with_a_message() {
     for (name, bin) in BINARIES {
@@ -73,6 +126,14 @@ fn bad_values_are_refused() {
     let (ok, _, stderr) = run(echo, &["--service-prefix", ""]);
     assert!(!ok);
     assert!(stderr.contains("service prefix is empty"), "{stderr}");
+    let eval = env!("CARGO_BIN_EXE_slope-eval");
+    let (ok, _, stderr) = run(eval, &["REC", "--render", "out", "--render-every", "0"]);
+    assert!(!ok);
+    assert!(
+        stderr.contains("--render-every <N>': must be at least 1 (1 renders every frame"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("18446744073709551615"), "{stderr}");
 }
 
 /// A user's error is printed once, a line per cause, and never with a

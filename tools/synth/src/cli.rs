@@ -56,10 +56,10 @@ pub struct Args {
     #[arg(long, value_name = "FILE")]
     pub scene: Option<PathBuf>,
 
-    /// Angle of the inclined plane to the ground, degrees, in (0, 90];
-    /// 90 is a wall; 0 removes the ramp (flat ground only); negative is a
-    /// descending slope (as --descending).
-    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
+    /// Angle of the inclined plane to the ground, degrees, above -90 and at
+    /// most 90: 90 is a wall; 0 removes the ramp (flat ground only);
+    /// negative is a descending slope (as --descending).
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true, value_parser = slope_arg)]
     pub slope: Option<f64>,
 
     /// The ground drops away at the foot line instead of rising.
@@ -297,6 +297,24 @@ pub fn run(args: &Args, stop: &StopFlag) -> anyhow::Result<RecordingSummary> {
     summary
 }
 
+/// What `--slope` answers outside (-90, 90].
+pub const SLOPE_RANGE: &str =
+    "must be above -90 and at most 90 degrees (0: no ramp; negative: descending, 90: a wall)";
+
+/// `--slope DEG`: above -90 (a descending slope is below 90°) and at most
+/// 90; its magnitude is the ramp's angle, 0 none.
+fn slope_arg(text: &str) -> Result<f64, String> {
+    let value: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{text}' is not a number"))?;
+    if value > -90.0 && value <= 90.0 {
+        Ok(value)
+    } else {
+        Err(SLOPE_RANGE.to_string())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -343,7 +361,20 @@ mod tests {
         assert!(parse(&["--slope", "0", "--distance", "2"])
             .scene_and_model()
             .is_err());
-        assert!(parse(&["--slope", "120"]).scene_and_model().is_err());
+        for bad in ["100", "-90", "nan", "inf"] {
+            let err = Args::try_parse_from(["slope-synth", "-o", "/tmp/x", "--slope", bad])
+                .expect_err("out of range");
+            let text = err.render().to_string();
+            assert!(text.contains("--slope"), "{text}");
+            assert!(text.contains(SLOPE_RANGE), "{text}");
+            assert!(!text.contains("ramp.slope_deg"), "{text}");
+        }
+        let (wall, _) = parse(&["--slope", "90"]).scene_and_model().expect("valid");
+        assert_eq!(wall.ramp.expect("ramp").slope_deg, 90.0);
+        let (steep, _) = parse(&["--slope", "-89.5"])
+            .scene_and_model()
+            .expect("valid");
+        assert_eq!(steep.ramp.expect("ramp").slope_deg, 89.5);
         let (down, _) = parse(&["--slope", "-5"]).scene_and_model().expect("valid");
         let ramp = down.ramp.expect("ramp");
         assert_eq!(ramp.direction, SlopeDirection::Descending);

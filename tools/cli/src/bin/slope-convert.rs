@@ -3,11 +3,11 @@
 use std::process::ExitCode;
 
 use clap::Parser;
-use slope_tools::cli::exit_status;
+use slope_tools::cli::{exit_status, stop_on_signals};
 use slope_tools::convert::{run, ConvertArgs};
 
 fn main() -> ExitCode {
     let args = ConvertArgs::parse();
     args.init_logging();
-    exit_status(run(&args).map(drop))
+    exit_status(stop_on_signals().and_then(|stop| run(&args, &stop).map(drop)))
 }
