@@ -172,13 +172,14 @@ fn a_streaming_recorder_stops_cleanly_with_a_valid_recording() {
     }
 }
 
-/// slope-demo stopped while it waits for its first estimate: status 0 and
-/// a summary of nothing. The signal comes as the demo announces the chain,
-/// before its children have started; the summary's "0 estimates" shows it
-/// was still waiting (a first estimate needs both children started and a
-/// frame through the estimator).
+/// slope-demo stopped as it starts: status 0 and its summary. The signal
+/// comes as the demo announces the chain, before its children have
+/// started, so the demo is almost always still waiting for its first
+/// estimate ("0 estimates"); on a loaded machine the signal may land after
+/// a frame went through, so the count is read, not pinned: it must be a
+/// number of estimates of the 10-frame recording, never more.
 #[test]
-fn a_waiting_demo_stops_cleanly_with_an_empty_summary() {
+fn a_demo_stopped_as_it_starts_stops_cleanly_with_its_summary() {
     let dir = recording("ramp16-clean");
     for signal in [Signal::SIGINT, Signal::SIGTERM] {
         let prefix = unique_prefix(&format!("demo-wait-{signal}"));
@@ -209,9 +210,13 @@ fn a_waiting_demo_stops_cleanly_with_an_empty_summary() {
             .iter()
             .find(|l| l.starts_with("summary:"))
             .unwrap_or_else(|| panic!("no summary after the stop: {rest:?}"));
+        let estimates: Option<u64> = summary
+            .strip_prefix("summary: ")
+            .and_then(|rest| rest.split_once(" estimates of a 10-frame recording"))
+            .and_then(|(count, _)| count.parse().ok());
         assert!(
-            summary.starts_with("summary: 0 estimates of a 10-frame recording"),
-            "{summary}"
+            estimates.is_some_and(|n| n <= 10),
+            "not a summary of the 10-frame recording: {summary}"
         );
     }
 }
