@@ -277,6 +277,26 @@ pub fn wait_loop(
     }
 }
 
+/// How far a run over frames got before SIGINT/SIGTERM stopped it
+/// (`slope-eval`, `slope-convert`): "interrupted after N of M frames".
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Interruption {
+    /// Frames handled (evaluated, or written or skipped as bad).
+    pub frames_done: usize,
+    /// Frames the run was asked to handle.
+    pub frames_total: usize,
+}
+
+impl std::fmt::Display for Interruption {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "interrupted after {} of {} frames",
+            self.frames_done, self.frames_total
+        )
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

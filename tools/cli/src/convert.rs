@@ -18,7 +18,7 @@ use slope_sensor::recording::{DepthImage, Recording};
 
 use slope_sensor::publish::StopFlag;
 
-use crate::cli::{max_frames_arg, LogArgs};
+use crate::cli::{max_frames_arg, Interruption, LogArgs};
 use crate::estimator::{load_config, method_arg};
 use crate::mcap_export::{McapExporter, McapFrame};
 
@@ -89,25 +89,6 @@ impl ConvertArgs {
 
     pub fn init_logging(&self) {
         self.log.init_logging();
-    }
-}
-
-/// How far a conversion got before SIGINT/SIGTERM stopped it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Interruption {
-    /// Frames read (written or skipped as bad).
-    pub frames_done: usize,
-    /// Frames the run was asked to convert.
-    pub frames_total: usize,
-}
-
-impl std::fmt::Display for Interruption {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "interrupted after {} of {} frames",
-            self.frames_done, self.frames_total
-        )
     }
 }
 

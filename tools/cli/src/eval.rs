@@ -43,7 +43,7 @@ use slope_sensor::recording::{DepthImage, FrameEntry, Recording};
 
 use slope_sensor::publish::StopFlag;
 
-use crate::cli::{max_frames_arg, LogArgs};
+use crate::cli::{max_frames_arg, Interruption, LogArgs};
 use crate::demo::median;
 use crate::estimator::{load_config, method_arg};
 use crate::eval_artifacts::{Artifacts, Snapshot};
@@ -508,25 +508,6 @@ fn render_every_arg(text: &str) -> Result<u64, String> {
         Ok(0) => Err(RENDER_EVERY_ZERO.to_string()),
         Ok(n) => Ok(n),
         Err(_) => Err(format!("'{text}' is not a whole number")),
-    }
-}
-
-/// How far a run got before SIGINT/SIGTERM stopped it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Interruption {
-    /// Frames evaluated (by every method), over all recordings.
-    pub frames_done: usize,
-    /// Frames the run was asked to evaluate, over all recordings that opened.
-    pub frames_total: usize,
-}
-
-impl std::fmt::Display for Interruption {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "interrupted after {} of {} frames",
-            self.frames_done, self.frames_total
-        )
     }
 }
 
