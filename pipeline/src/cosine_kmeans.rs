@@ -90,6 +90,43 @@ impl CosineKmeans {
         max_iterations: usize,
         merge_spread_ratio: f64,
     ) -> Option<Clustering> {
+        self.load_units(normals);
+        let n = self.unit.len();
+        if n == 0 {
+            return None;
+        }
+        let mut centres = self.farthest_first_centres(k.clamp(1, n))?;
+        let k = centres.len();
+        self.labels.clear();
+        self.labels.resize(n, usize::MAX);
+        self.load_f32();
+        let (counts, iterations) = self.lloyd(&mut centres, max_iterations);
+        let dominant = counts
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(&a.0)))
+            .map_or(0, |(j, _)| j);
+        let centre = centres[dominant];
+        let spread_deg = self.spread_deg(dominant, &centre);
+        let merge_deg = merge_spread_ratio * spread_deg;
+        let kept = (0..k)
+            .filter(|&j| {
+                j == dominant
+                    || (counts[j] > 0 && angle_between_deg(&centres[j], &centre) <= merge_deg)
+            })
+            .collect();
+        Some(Clustering {
+            centres,
+            counts,
+            dominant,
+            kept,
+            spread_deg,
+            iterations,
+        })
+    }
+
+    /// `unit`: the finite, non-zero vectors of `normals`, normalised.
+    fn load_units(&mut self, normals: &[Vector3<f64>]) {
         self.unit.clear();
         self.unit.extend(
             normals
@@ -97,12 +134,13 @@ impl CosineKmeans {
                 .filter(|n| n.iter().all(|c| c.is_finite()))
                 .filter_map(|n| n.try_normalize(1e-12)),
         );
-        let n = self.unit.len();
-        if n == 0 {
-            return None;
-        }
-        let k = k.clamp(1, n);
-        // Farthest-first initial centres.
+    }
+
+    /// Up to `k` initial centres, farthest first: the unit vector nearest
+    /// the mean direction, then each time the vector farthest (cosine
+    /// distance) from its nearest centre so far; fewer when every vector
+    /// coincides with a centre. `unit` must not be empty.
+    fn farthest_first_centres(&self, k: usize) -> Option<Vec<Vector3<f64>>> {
         let mean = self.unit.iter().sum::<Vector3<f64>>();
         let first = match mean.try_normalize(1e-12) {
             Some(m) => self.argmin_distance(&m),
@@ -128,16 +166,24 @@ impl CosineKmeans {
             }
             centres.push(c);
         }
-        let k = centres.len();
-        self.labels.clear();
-        self.labels.resize(n, usize::MAX);
-        self.load_f32();
+        Some(centres)
+    }
+
+    /// Lloyd iterations from `centres` (moved in place) until converged or
+    /// `max_iterations` (at least one) ran: `labels` holds each unit
+    /// vector's cluster; returns the clusters' sizes and the iterations run.
+    fn lloyd(
+        &mut self,
+        centres: &mut [Vector3<f64>],
+        max_iterations: usize,
+    ) -> (Vec<usize>, usize) {
+        let n = self.unit.len();
         let mut iterations = 0;
-        let mut counts = vec![0usize; k];
+        let mut counts = vec![0usize; centres.len()];
         for _ in 0..max_iterations.max(1) {
             iterations += 1;
             let mut changed = 0usize;
-            self.assign(&centres);
+            self.assign(centres);
             for (label, &best) in self.labels.iter_mut().zip(&self.best) {
                 let best = best as usize;
                 changed += usize::from(*label != best);
@@ -159,36 +205,21 @@ impl CosineKmeans {
                 break;
             }
         }
-        let dominant = counts
-            .iter()
-            .enumerate()
-            .max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(&a.0)))
-            .map_or(0, |(j, _)| j);
-        let centre = centres[dominant];
+        (counts, iterations)
+    }
+
+    /// RMS angle, degrees, of the members of cluster `label` to `centre`
+    /// (0 for an empty cluster).
+    fn spread_deg(&self, label: usize, centre: &Vector3<f64>) -> f64 {
         let (mut sum_sq, mut count) = (0.0, 0usize);
         for (u, &l) in self.unit.iter().zip(&self.labels) {
-            if l == dominant {
-                let a = angle_between_deg(u, &centre);
+            if l == label {
+                let a = angle_between_deg(u, centre);
                 sum_sq += a * a;
                 count += 1;
             }
         }
-        let spread_deg = (sum_sq / count.max(1) as f64).sqrt();
-        let merge_deg = merge_spread_ratio * spread_deg;
-        let kept = (0..k)
-            .filter(|&j| {
-                j == dominant
-                    || (counts[j] > 0 && angle_between_deg(&centres[j], &centre) <= merge_deg)
-            })
-            .collect();
-        Some(Clustering {
-            centres,
-            counts,
-            dominant,
-            kept,
-            spread_deg,
-            iterations,
-        })
+        (sum_sq / count.max(1) as f64).sqrt()
     }
 
     /// The unit vectors of cluster `cluster` from the last call.

@@ -166,28 +166,72 @@ impl NormalEstimator {
         config: &NormalsConfig,
         viewpoint: &Vector3<f64>,
     ) -> (&[Vector3<f64>], NormalStats) {
-        let nan = Vector3::repeat(f64::NAN);
-        self.normals.clear();
-        self.normals.resize(members.len(), nan);
-        self.fallback.clear();
+        self.reset(members.len());
         let mut stats = NormalStats::default();
-        self.radius.clear();
-        self.radius.resize(members.len(), u16::MAX);
-        self.sums.clear();
-        self.sums.resize(members.len(), [0.0; CHANNELS]);
-        let w = cloud.width;
         let Some((bounds, centre)) = bounds_and_centre(cloud, support) else {
             stats.undefined = members.len();
             return (&self.normals, stats);
         };
         self.build_table(cloud, support, &bounds, &centre);
+        self.find_windows(cloud, members, &bounds, config, &mut stats);
+        let noise_scale = if config.ray_noise_correction {
+            1.0
+        } else {
+            0.0
+        };
+        self.window_normals(cloud, members, &centre, noise_scale, viewpoint, &mut stats);
+        // Interior points only: a point the windows could not serve is no
+        // interior point, so when the interior normals will be kept alone
+        // the k-d tree is not built for the others.
+        let k = config.neighbours.max(3);
+        let interior = self.radius.iter().filter(|&&r| r == 0).count();
+        let interior_only = config.interior_only && interior >= k.max(members.len() / 10);
+        if interior_only {
+            stats.border += self.fallback.len();
+            self.fallback.clear();
+        }
+        if !self.fallback.is_empty() {
+            stats.from_tree = self.fallback.len();
+            stats.undefined +=
+                self.tree_normals(cloud, members, support, k, viewpoint, noise_scale);
+        }
+        if interior_only {
+            stats.border += self.drop_border_normals();
+        }
+        (&self.normals, stats)
+    }
+
+    /// Empties the per-call buffers and sizes them for `members` members:
+    /// every normal NaN, every radius unknown, every window empty.
+    fn reset(&mut self, members: usize) {
+        self.normals.clear();
+        self.normals.resize(members, Vector3::repeat(f64::NAN));
+        self.fallback.clear();
+        self.radius.clear();
+        self.radius.resize(members, u16::MAX);
+        self.sums.clear();
+        self.sums.resize(members, [0.0; CHANNELS]);
+    }
+
+    /// For each member, the moment sums of its smallest window (from the
+    /// table over `bounds`) that holds K points and spans the patch radius,
+    /// into `sums`, and how far it had to grow, into `radius`; a member
+    /// outside the bounds or without such a window goes to `fallback`.
+    fn find_windows(
+        &mut self,
+        cloud: &CloudView<'_>,
+        members: &[u32],
+        bounds: &Bounds,
+        config: &NormalsConfig,
+        stats: &mut NormalStats,
+    ) {
+        let w = cloud.width;
         let k = config.neighbours.max(3);
         let focal = cloud.focal_px();
         let r0 = start_radius(k);
         let r_max = config.max_window_radius_px.max(r0);
         let g = TABLE_CELL_PX;
-        let (bw, bh) = (bounds.width.div_ceil(g), bounds.height.div_ceil(g));
-        let tw = bw + 1;
+        let cells = (bounds.width.div_ceil(g), bounds.height.div_ceil(g));
         for (slot, &pixel) in members.iter().enumerate() {
             let pixel = pixel as usize;
             let Some(p) = cloud.points.get(pixel).filter(|p| is_measured(p)) else {
@@ -205,7 +249,6 @@ impl NormalEstimator {
                 self.fallback.push(slot);
                 continue;
             };
-            let mut found = None;
             self.radius[slot] = u16::MAX;
             // The patch spans at least `min_patch_radius_m` on the surface.
             let metric = (config.min_patch_radius_m * focal / f64::from(p.z_m).max(1e-3)).ceil();
@@ -214,43 +257,31 @@ impl NormalEstimator {
             } else {
                 r0
             };
-            for r in r_start..=r_max {
-                // The table cells the window's pixels touch.
-                let (a0, a1) = (u.saturating_sub(r) / g, ((u + r) / g + 1).min(bw));
-                let (b0, b1) = (v.saturating_sub(r) / g, ((v + r) / g + 1).min(bh));
-                let t = &self.table;
-                let s = |c: usize| {
-                    t[b1 * tw + a1][c] - t[b0 * tw + a1][c] - t[b1 * tw + a0][c]
-                        + t[b0 * tw + a0][c]
-                };
-                let count = s(0);
-                if count + 0.5 >= k as f64 {
-                    let mut m = [0.0; CHANNELS];
-                    for (c, mc) in m.iter_mut().enumerate() {
-                        *mc = s(c);
-                    }
-                    found = Some(m);
+            match smallest_window(&self.table, cells, (u, v), r_start..=r_max, k) {
+                Some((m, r)) => {
+                    stats.from_window += 1;
                     // 0: the first window sufficed (an interior point).
                     self.radius[slot] = (r - r_start) as u16;
-                    break;
-                }
-                if a0 == 0 && b0 == 0 && a1 == bw && b1 == bh {
-                    break;
-                }
-            }
-            match found {
-                Some(m) => {
-                    stats.from_window += 1;
                     self.sums[slot] = m;
                 }
                 None => self.fallback.push(slot),
             }
         }
-        let noise_scale = if config.ray_noise_correction {
-            1.0
-        } else {
-            0.0
-        };
+    }
+
+    /// The oriented normal of each member with a window, from its sums
+    /// (coordinates relative to `centre`); a degenerate window counts as
+    /// undefined.
+    fn window_normals(
+        &mut self,
+        cloud: &CloudView<'_>,
+        members: &[u32],
+        centre: &Vector3<f64>,
+        noise_scale: f64,
+        viewpoint: &Vector3<f64>,
+        stats: &mut NormalStats,
+    ) {
+        let focal = cloud.focal_px();
         for (slot, &pixel) in members.iter().enumerate() {
             let m = &self.sums[slot];
             if m[0] < 0.5 {
@@ -259,35 +290,27 @@ impl NormalEstimator {
             let Some(p) = cloud.point(pixel as usize) else {
                 continue;
             };
-            if let Some(n) = normal_from_sums(m, &centre, noise_scale, focal) {
+            if let Some(n) = normal_from_sums(m, centre, noise_scale, focal) {
                 self.normals[slot] = orient(n, &p, viewpoint);
             } else {
                 stats.undefined += 1;
             }
         }
-        // Interior points only: a point the windows could not serve is no
-        // interior point, so when the interior normals will be kept alone
-        // the k-d tree is not built for the others.
-        let interior = self.radius.iter().filter(|&&r| r == 0).count();
-        let interior_only = config.interior_only && interior >= k.max(members.len() / 10);
-        if interior_only {
-            stats.border += self.fallback.len();
-            self.fallback.clear();
-        }
-        if !self.fallback.is_empty() {
-            stats.from_tree = self.fallback.len();
-            stats.undefined +=
-                self.tree_normals(cloud, members, support, k, viewpoint, noise_scale);
-        }
-        if interior_only {
-            for (n, &r) in self.normals.iter_mut().zip(&self.radius) {
-                if r != 0 && n.x.is_finite() {
-                    *n = nan;
-                    stats.border += 1;
-                }
+    }
+
+    /// Sets the normals of the points that are not interior (whose first
+    /// window did not suffice) to NaN; returns how many defined ones it
+    /// dropped.
+    fn drop_border_normals(&mut self) -> usize {
+        let nan = Vector3::repeat(f64::NAN);
+        let mut dropped = 0;
+        for (n, &r) in self.normals.iter_mut().zip(&self.radius) {
+            if r != 0 && n.x.is_finite() {
+                *n = nan;
+                dropped += 1;
             }
         }
-        (&self.normals, stats)
+        dropped
     }
 
     /// Summed-area tables of the ten moments over the bounding box, one
@@ -302,7 +325,6 @@ impl NormalEstimator {
         let g = TABLE_CELL_PX;
         let (bw, bh) = (b.width.div_ceil(g), b.height.div_ceil(g));
         let tw = bw + 1;
-        let w = cloud.width;
         // The members' moments summed per block, a row of blocks at a
         // time; members in pixel order (as inliers are) need no sort.
         self.order.clear();
@@ -319,40 +341,7 @@ impl NormalEstimator {
             .extend(std::iter::repeat_n([0.0; CHANNELS], tw + 1));
         let mut next = 0;
         for bv in 0..bh {
-            self.block_row.fill([0.0; CHANNELS]);
-            // The pixel rows of this row of blocks, walked without a
-            // division per pixel; a block's sum is kept in registers while
-            // consecutive pixels fall into it.
-            for v in b.v0 + bv * g..(b.v0 + (bv + 1) * g).min(b.v0 + b.height) {
-                let row_start = v * w;
-                let mut current: Option<(usize, [f64; CHANNELS])> = None;
-                while let Some(&pixel) = self
-                    .order
-                    .get(next)
-                    .filter(|&&p| (p as usize) < row_start + w)
-                {
-                    next += 1;
-                    let pixel = pixel as usize;
-                    let (Some(u), Some(p)) = (
-                        pixel.checked_sub(row_start + b.u0).filter(|&u| u < b.width),
-                        cloud.points.get(pixel).filter(|p| is_measured(p)),
-                    ) else {
-                        continue;
-                    };
-                    let block = u / g;
-                    if let Some((at, sums)) = current.filter(|(at, _)| *at != block) {
-                        add_into(&mut self.block_row[at], &sums);
-                        current = None;
-                    }
-                    let sums = &mut current.get_or_insert((block, [0.0; CHANNELS])).1;
-                    for (s, x) in sums.iter_mut().zip(moments(&(to_vec3(p) - c))) {
-                        *s += x;
-                    }
-                }
-                if let Some((at, sums)) = current {
-                    add_into(&mut self.block_row[at], &sums);
-                }
-            }
+            self.sum_block_row(cloud, b, c, bv, &mut next);
             let mut run = [0.0; CHANNELS];
             for bu in 0..bw {
                 let above = &self.table[bv * tw + bu + 1];
@@ -365,6 +354,55 @@ impl NormalEstimator {
             }
             if bv + 1 < bh {
                 self.table.push([0.0; CHANNELS]);
+            }
+        }
+    }
+
+    /// The moments (relative to `c`) of the sorted members in the pixel
+    /// rows of block row `bv`, summed per block into `block_row`; `next`
+    /// is the first member not yet summed, and moves past these rows.
+    fn sum_block_row(
+        &mut self,
+        cloud: &CloudView<'_>,
+        b: &Bounds,
+        c: &Vector3<f64>,
+        bv: usize,
+        next: &mut usize,
+    ) {
+        let g = TABLE_CELL_PX;
+        let w = cloud.width;
+        self.block_row.fill([0.0; CHANNELS]);
+        // The pixel rows of this row of blocks, walked without a
+        // division per pixel; a block's sum is kept in registers while
+        // consecutive pixels fall into it.
+        for v in b.v0 + bv * g..(b.v0 + (bv + 1) * g).min(b.v0 + b.height) {
+            let row_start = v * w;
+            let mut current: Option<(usize, [f64; CHANNELS])> = None;
+            while let Some(&pixel) = self
+                .order
+                .get(*next)
+                .filter(|&&p| (p as usize) < row_start + w)
+            {
+                *next += 1;
+                let pixel = pixel as usize;
+                let (Some(u), Some(p)) = (
+                    pixel.checked_sub(row_start + b.u0).filter(|&u| u < b.width),
+                    cloud.points.get(pixel).filter(|p| is_measured(p)),
+                ) else {
+                    continue;
+                };
+                let block = u / g;
+                if let Some((at, sums)) = current.filter(|(at, _)| *at != block) {
+                    add_into(&mut self.block_row[at], &sums);
+                    current = None;
+                }
+                let sums = &mut current.get_or_insert((block, [0.0; CHANNELS])).1;
+                for (s, x) in sums.iter_mut().zip(moments(&(to_vec3(p) - c))) {
+                    *s += x;
+                }
+            }
+            if let Some((at, sums)) = current {
+                add_into(&mut self.block_row[at], &sums);
             }
         }
     }
@@ -439,6 +477,44 @@ fn start_radius(k: usize) -> usize {
         r += 1;
     }
     r
+}
+
+/// The moment sums of the smallest window around table pixel `(u, v)`,
+/// its radius tried from `radii` in turn, that holds at least `k` points,
+/// and that radius; `None` when none does (or the window covers the whole
+/// table of `cells` = (columns, rows) before). A window holds the table
+/// cells its pixels touch.
+#[inline]
+fn smallest_window(
+    table: &[[f64; CHANNELS]],
+    (bw, bh): (usize, usize),
+    (u, v): (usize, usize),
+    radii: std::ops::RangeInclusive<usize>,
+    k: usize,
+) -> Option<([f64; CHANNELS], usize)> {
+    let g = TABLE_CELL_PX;
+    let tw = bw + 1;
+    for r in radii {
+        // The table cells the window's pixels touch.
+        let (a0, a1) = (u.saturating_sub(r) / g, ((u + r) / g + 1).min(bw));
+        let (b0, b1) = (v.saturating_sub(r) / g, ((v + r) / g + 1).min(bh));
+        let s = |c: usize| {
+            table[b1 * tw + a1][c] - table[b0 * tw + a1][c] - table[b1 * tw + a0][c]
+                + table[b0 * tw + a0][c]
+        };
+        let count = s(0);
+        if count + 0.5 >= k as f64 {
+            let mut m = [0.0; CHANNELS];
+            for (c, mc) in m.iter_mut().enumerate() {
+                *mc = s(c);
+            }
+            return Some((m, r));
+        }
+        if a0 == 0 && b0 == 0 && a1 == bw && b1 == bh {
+            break;
+        }
+    }
+    None
 }
 
 /// Bounding box of the members' pixels and their centroid.

@@ -65,21 +65,7 @@ impl EveryPointRansac {
         rng: &mut ChaCha8Rng,
     ) -> &[SegmentedPlane] {
         self.planes.clear();
-        self.pixels.clear();
-        self.xs.clear();
-        self.ys.clear();
-        self.zs.clear();
-        self.limits.clear();
-        let threshold = Threshold::of(config);
-        for (i, &k) in keep.iter().enumerate() {
-            if let Some(p) = cloud.point(i).filter(|_| k) {
-                self.pixels.push(i as u32);
-                self.xs.push(p.x);
-                self.ys.push(p.y);
-                self.zs.push(p.z);
-                self.limits.push(threshold.at(&p));
-            }
-        }
+        self.load_free_points(cloud, keep, Threshold::of(config));
         let total = self.pixels.len();
         let min_points = config.min_plane_points.max(3);
         while self.planes.len() < config.max_planes
@@ -93,31 +79,58 @@ impl EveryPointRansac {
                 break;
             }
             self.flag_inliers(&plane);
-            let mut moments = Moments::new();
-            let mut inliers = Vec::with_capacity(count);
-            for (k, &is_inlier) in self.inlier.iter().enumerate() {
-                if is_inlier {
-                    moments.add(&self.point(k));
-                    inliers.push(self.pixels[k]);
-                }
-            }
-            let fitted = fit_tls(&moments)
-                .unwrap_or(plane)
-                .oriented_towards(&Vector3::zeros());
-            let rms_m = moments.covariance().map_or(0.0, |c| {
-                let n = fitted.normal;
-                n.dot(&(c * n)).max(0.0).sqrt()
-            });
-            self.planes.push(SegmentedPlane {
-                plane: fitted,
-                inliers,
-                centroid: moments.mean().unwrap_or_else(Vector3::zeros),
-                rms_m,
-                moments,
-            });
+            let segmented = self.fit_inliers(&plane, count);
+            self.planes.push(segmented);
             self.remove_inliers();
         }
         &self.planes
+    }
+
+    /// The free points: every kept, measured pixel, with its coordinates
+    /// and inlier distance under `threshold`, in pixel order.
+    fn load_free_points(&mut self, cloud: &CloudView<'_>, keep: &[bool], threshold: Threshold) {
+        self.pixels.clear();
+        self.xs.clear();
+        self.ys.clear();
+        self.zs.clear();
+        self.limits.clear();
+        for (i, &k) in keep.iter().enumerate() {
+            if let Some(p) = cloud.point(i).filter(|_| k) {
+                self.pixels.push(i as u32);
+                self.xs.push(p.x);
+                self.ys.push(p.y);
+                self.zs.push(p.z);
+                self.limits.push(threshold.at(&p));
+            }
+        }
+    }
+
+    /// The plane of the flagged inliers (`count` of them; found as
+    /// `plane`): their TLS fit (`plane` if none) towards the camera, with
+    /// their pixels, centroid, RMS distance and moments.
+    fn fit_inliers(&self, plane: &Plane, count: usize) -> SegmentedPlane {
+        let mut moments = Moments::new();
+        let mut inliers = Vec::with_capacity(count);
+        for (k, &is_inlier) in self.inlier.iter().enumerate() {
+            if is_inlier {
+                moments.add(&self.point(k));
+                inliers.push(self.pixels[k]);
+            }
+        }
+        let fitted = fit_tls(&moments)
+            .unwrap_or(*plane)
+            .oriented_towards(&Vector3::zeros());
+        let rms_m = moments.covariance().map_or(0.0, |c| {
+            let n = fitted.normal;
+            n.dot(&(c * n)).max(0.0).sqrt()
+        });
+        SegmentedPlane {
+            plane: fitted,
+            inliers,
+            centroid: moments.mean().unwrap_or_else(Vector3::zeros),
+            rms_m,
+            moments,
+        }
     }
 
     fn point(&self, k: usize) -> Vector3<f64> {

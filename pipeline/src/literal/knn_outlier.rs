@@ -55,16 +55,7 @@ impl KnnOutlierFilter {
     ) -> OutlierStats {
         keep.clear();
         keep.resize(cloud.points.len(), false);
-        self.entries.clear();
-        self.pixels.clear();
-        self.mean_distance.clear();
-        for (i, p) in cloud.points.iter().enumerate() {
-            if is_measured(p) {
-                self.entries
-                    .push([f64::from(p.x_m), f64::from(p.y_m), f64::from(p.z_m)]);
-                self.pixels.push(i);
-            }
-        }
+        self.gather_measured(cloud);
         let n = self.entries.len();
         // A lone point has no neighbour: isolated, dropped.
         let m = config.neighbours.max(1).min(n.saturating_sub(1));
@@ -77,14 +68,7 @@ impl KnnOutlierFilter {
                 ..OutlierStats::default()
             };
         };
-        for p in &self.entries {
-            let nn = tree
-                .query(p)
-                .nearest_n::<SquaredEuclidean<f64>>(k)
-                .execute();
-            let sum: f64 = nn.iter().skip(1).map(|q| q.distance.sqrt()).sum();
-            self.mean_distance.push(sum / m as f64);
-        }
+        self.fill_mean_distances(&tree, k, m);
         let count = n as f64;
         let mean = self.mean_distance.iter().sum::<f64>() / count;
         let var = self
@@ -94,13 +78,7 @@ impl KnnOutlierFilter {
             .sum::<f64>()
             / count;
         let threshold = mean + config.std_ratio * var.sqrt();
-        let mut kept = 0;
-        for (&pixel, &d) in self.pixels.iter().zip(&self.mean_distance) {
-            if d <= threshold {
-                keep[pixel] = true;
-                kept += 1;
-            }
-        }
+        let kept = self.mark_kept(threshold, keep);
         OutlierStats {
             mean_distance_m: mean,
             std_distance_m: var.sqrt(),
@@ -108,6 +86,53 @@ impl KnnOutlierFilter {
             kept,
             removed: n - kept,
         }
+    }
+
+    /// `entries` and `pixels`: the coordinates and pixel index of every
+    /// measured point of `cloud`, in pixel order; `mean_distance` emptied.
+    fn gather_measured(&mut self, cloud: &CloudView<'_>) {
+        self.entries.clear();
+        self.pixels.clear();
+        self.mean_distance.clear();
+        for (i, p) in cloud.points.iter().enumerate() {
+            if is_measured(p) {
+                self.entries
+                    .push([f64::from(p.x_m), f64::from(p.y_m), f64::from(p.z_m)]);
+                self.pixels.push(i);
+            }
+        }
+    }
+
+    /// `mean_distance`: for each entry, the mean distance to its `m`
+    /// nearest neighbours, from the `k = m + 1` nearest in `tree` (the
+    /// nearest, the point itself, skipped).
+    fn fill_mean_distances(
+        &mut self,
+        tree: &ImmutableKdTree<f64, 3>,
+        k: std::num::NonZero<usize>,
+        m: usize,
+    ) {
+        for p in &self.entries {
+            let nn = tree
+                .query(p)
+                .nearest_n::<SquaredEuclidean<f64>>(k)
+                .execute();
+            let sum: f64 = nn.iter().skip(1).map(|q| q.distance.sqrt()).sum();
+            self.mean_distance.push(sum / m as f64);
+        }
+    }
+
+    /// Marks in `keep` the pixels whose statistic is at most `threshold`;
+    /// returns how many.
+    fn mark_kept(&self, threshold: f64, keep: &mut [bool]) -> usize {
+        let mut kept = 0;
+        for (&pixel, &d) in self.pixels.iter().zip(&self.mean_distance) {
+            if d <= threshold {
+                keep[pixel] = true;
+                kept += 1;
+            }
+        }
+        kept
     }
 }
 

@@ -35,16 +35,11 @@ impl PlaneSegmenter {
         gated: bool,
         rng: &mut ChaCha8Rng,
     ) -> Option<Plane> {
-        let sample = &self.sample.points;
-        let n = sample.len();
-        // Hypotheses are drawn from points with a known normal when the gate
-        // is on (a point without one sits on an edge or in clutter).
-        self.pool.clear();
-        self.pool
-            .extend((0..n as u32).filter(|&j| !gated || sample.has_normal(j as usize)));
+        self.fill_pool(gated);
         if self.pool.len() < 3 {
             return None;
         }
+        let sample = &self.sample.points;
         fill_score_subset(sample, &mut self.score, &mut self.indices);
         let score = &self.score;
         let mut best: Option<(usize, Plane)> = None;
@@ -76,23 +71,44 @@ impl PlaneSegmenter {
                 let (count, plane) = local_optimisation(count, plane, score);
                 best = Some((count, plane));
                 let w = count as f64 / score.len() as f64;
-                // Half the hypotheses need one good point, half three.
-                let p_good = if gated {
-                    0.5 * (w + w * w * w)
-                } else {
-                    w * w * w
-                };
-                if p_good > 0.0 && p_good < 1.0 {
-                    let n_req = log_fail / (1.0 - p_good).ln();
-                    if n_req.is_finite() {
-                        needed = n_req.ceil() as usize;
-                    }
-                } else if p_good >= 1.0 {
-                    needed = 0;
+                if let Some(required) = hypotheses_required(w, gated, log_fail) {
+                    needed = required;
                 }
             }
         }
         best.filter(|(s, _)| *s >= 3).map(|(_, p)| p)
+    }
+
+    /// `pool`: the free sample points a hypothesis may be drawn from; with
+    /// the gate on, only those with a known normal (a point without one
+    /// sits on an edge or in clutter).
+    fn fill_pool(&mut self, gated: bool) {
+        let sample = &self.sample.points;
+        let n = sample.len();
+        self.pool.clear();
+        self.pool
+            .extend((0..n as u32).filter(|&j| !gated || sample.has_normal(j as usize)));
+    }
+}
+
+/// The adaptive number of hypotheses after a new best with inlier ratio
+/// `w`: enough that one draw of good points happens with the confidence
+/// whose `ln(1 - confidence)` is `log_fail`. Gated, half the hypotheses
+/// need one good point (point and normal), half three. `None`: the count
+/// stays as it was (a ratio of 0, or a count that is not finite).
+fn hypotheses_required(w: f64, gated: bool, log_fail: f64) -> Option<usize> {
+    let p_good = if gated {
+        0.5 * (w + w * w * w)
+    } else {
+        w * w * w
+    };
+    if p_good > 0.0 && p_good < 1.0 {
+        let n_req = log_fail / (1.0 - p_good).ln();
+        n_req.is_finite().then(|| n_req.ceil() as usize)
+    } else if p_good >= 1.0 {
+        Some(0)
+    } else {
+        None
     }
 }
 

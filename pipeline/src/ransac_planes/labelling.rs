@@ -74,15 +74,23 @@ impl PlaneSegmenter {
         found: &[Plane],
         t: Threshold,
     ) {
-        let (w, h) = (cloud.width, cloud.height);
-        let (s, half) = (self.sample.stride, self.sample.stride / 2);
         let (cw, ch) = (self.sample.coarse_w, self.sample.coarse_h);
         if found.is_empty() || cw == 0 || ch == 0 {
             self.planes.clear();
             self.moments.clear();
             return;
         }
-        // The last frame's inlier lists are reused (no reallocation).
+        self.reset_planes(found);
+        self.fill_cell_candidates();
+        self.label_rows(cloud, keep, found, t);
+        self.moments.clear();
+        self.moments
+            .extend(self.sums.iter().map(MomentSums::moments));
+    }
+
+    /// One empty plane per found plane, reusing the last frame's inlier
+    /// lists (no reallocation), and one moment sum about each plane.
+    fn reset_planes(&mut self, found: &[Plane]) {
         self.planes.truncate(found.len());
         self.planes.iter_mut().for_each(|p| p.inliers.clear());
         self.planes.resize_with(found.len(), || SegmentedPlane {
@@ -95,7 +103,11 @@ impl PlaneSegmenter {
         self.sums.clear();
         self.sums
             .extend(found.iter().map(|p| MomentSums::about(-p.d * p.normal)));
-        // Per coarse cell, the distinct planes of the 3x3 cells around it.
+    }
+
+    /// Per coarse cell, the distinct planes of the 3x3 cells around it.
+    fn fill_cell_candidates(&mut self) {
+        let (cw, ch) = (self.sample.coarse_w, self.sample.coarse_h);
         self.cell_candidates.clear();
         for c in 0..cw * ch {
             let mut set = ([NO_PLANE; 9], 0u8);
@@ -108,6 +120,15 @@ impl PlaneSegmenter {
             }
             self.cell_candidates.push(set);
         }
+    }
+
+    /// The labelling pass proper: each kept, measured pixel to the nearest
+    /// of its cell's candidate planes within the threshold, pushed onto
+    /// that plane's inliers and added to its sums.
+    fn label_rows(&mut self, cloud: &CloudView<'_>, keep: &[bool], found: &[Plane], t: Threshold) {
+        let (w, h) = (cloud.width, cloud.height);
+        let (s, half) = (self.sample.stride, self.sample.stride / 2);
+        let (cw, ch) = (self.sample.coarse_w, self.sample.coarse_h);
         // Each row is walked a sample cell's columns at a time: pixels
         // of one run share their candidate planes (none: skipped whole).
         let run_start = |c: usize| if c == 0 { 0 } else { c * s + half };
@@ -147,8 +168,5 @@ impl PlaneSegmenter {
                 }
             }
         }
-        self.moments.clear();
-        self.moments
-            .extend(self.sums.iter().map(MomentSums::moments));
     }
 }

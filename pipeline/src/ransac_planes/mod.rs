@@ -190,16 +190,10 @@ impl PlaneSegmenter {
             && self.sample.points.len() >= 3
             && (self.sample.points.len() as f64) >= config.min_remaining_fraction * total as f64
         {
-            let Some(mut plane) = self.best_hypothesis(config, gated, rng) else {
+            let Some(plane) = self.best_hypothesis(config, gated, rng) else {
                 break;
             };
-            // Refine on the sample: TLS of the inliers, twice.
-            for _ in 0..2 {
-                match fit_tls(&self.sample.points.inlier_moments(&plane)) {
-                    Some(refined) => plane = refined,
-                    None => break,
-                }
-            }
+            let plane = self.refine_on_sample(plane);
             // The largest 8-connected region of its sample inliers on the
             // sample grid, refitted alone (without the pull of other pieces
             // in the same plane), collects its region once more.
@@ -213,18 +207,10 @@ impl PlaneSegmenter {
                 if failures > MAX_FAILURES {
                     break;
                 }
-                self.sample
-                    .points
-                    .inlier_flags(&plane, Gate::Normals, &mut self.flags);
-                self.sample.remove(&self.flags);
+                self.drop_sample_inliers(&plane);
                 continue;
             };
-            // Take the region's cells out of the sample.
-            let label = found.len() as u16;
-            for &c in &self.region {
-                self.cell_plane[c as usize] = label;
-            }
-            self.sample.remove_cells(&self.region);
+            self.take_region(found.len() as u16);
             tracing::trace!(
                 plane = found.len(),
                 cells = self.region.len(),
@@ -234,6 +220,36 @@ impl PlaneSegmenter {
             found.push(plane_fit);
         }
         found
+    }
+
+    /// `plane` refined on the sample: the TLS fit of its sample inliers,
+    /// twice (or fewer times, while a fit exists).
+    fn refine_on_sample(&self, mut plane: Plane) -> Plane {
+        for _ in 0..2 {
+            match fit_tls(&self.sample.points.inlier_moments(&plane)) {
+                Some(refined) => plane = refined,
+                None => break,
+            }
+        }
+        plane
+    }
+
+    /// Drops the (normal-gated) sample inliers of `plane` from the sample:
+    /// they could not seed a plane.
+    fn drop_sample_inliers(&mut self, plane: &Plane) {
+        self.sample
+            .points
+            .inlier_flags(plane, Gate::Normals, &mut self.flags);
+        self.sample.remove(&self.flags);
+    }
+
+    /// Gives the cells of `region` to plane `label` and takes them out of
+    /// the sample.
+    fn take_region(&mut self, label: u16) {
+        for &c in &self.region {
+            self.cell_plane[c as usize] = label;
+        }
+        self.sample.remove_cells(&self.region);
     }
 
     /// A plane found first took the sample cells of its neighbour along

@@ -46,16 +46,47 @@ pub fn choose_ground(
     mounted: bool,
     config: &SelectionConfig,
 ) -> Option<Ground> {
+    let level = level_candidates(planes, reference, mounted, config);
+    let Some(anchor) = family_anchor(planes, &level, reference, mounted) else {
+        return mounted.then_some(Ground::Mount);
+    };
+    let up = planes[anchor].plane.normal;
+    let family = ground_family(planes, level, &up, mount_height_m, config);
+    let Some(g) = lowest_member(planes, &family, &up, config) else {
+        return mounted.then_some(Ground::Mount);
+    };
+    Some(Ground::Planes(ground_segments(planes, g, family, config)))
+}
+
+/// Step 1: the flat planes within the tilt allowed (mount or no mount) of
+/// the reference up, in index order.
+fn level_candidates(
+    planes: &[PlaneSummary],
+    reference: &Vector3<f64>,
+    mounted: bool,
+    config: &SelectionConfig,
+) -> Vec<usize> {
     let max_tilt = if mounted {
         config.ground_max_tilt_deg
     } else {
         config.unmounted_ground_max_tilt_deg
     };
-    let tilt = |k: usize| angle_between_deg(&planes[k].plane.normal, reference);
-    let level: Vec<usize> = (0..planes.len())
-        .filter(|&k| is_flat(&planes[k], config) && tilt(k) <= max_tilt)
-        .collect();
-    let anchor = if mounted {
+    (0..planes.len())
+        .filter(|&k| is_flat(&planes[k], config) && tilt_deg(&planes[k], reference) <= max_tilt)
+        .collect()
+}
+
+/// Step 2, the plane that sets the ground family's up: with a mount the
+/// level plane nearest the reference up, without one the level plane with
+/// the most pixels in the bottom third of the image (ties: lowest index).
+fn family_anchor(
+    planes: &[PlaneSummary],
+    level: &[usize],
+    reference: &Vector3<f64>,
+    mounted: bool,
+) -> Option<usize> {
+    let tilt = |k: usize| tilt_deg(&planes[k], reference);
+    if mounted {
         level
             .iter()
             .copied()
@@ -67,39 +98,61 @@ pub fn choose_ground(
                 .cmp(&planes[b].bottom_pixels)
                 .then(b.cmp(&a))
         })
-    };
-    let Some(anchor) = anchor else {
-        return mounted.then_some(Ground::Mount);
-    };
-    let up = planes[anchor].plane.normal;
-    // Height of a plane's centroid below the camera along the family's up.
-    let depth_below = |k: usize| -up.dot(&planes[k].centroid);
-    let family: Vec<usize> = level
+    }
+}
+
+/// Steps 2-3: the level planes parallel to `up` and, with a known mount
+/// height, at that height below the camera.
+fn ground_family(
+    planes: &[PlaneSummary],
+    level: Vec<usize>,
+    up: &Vector3<f64>,
+    mount_height_m: Option<f64>,
+    config: &SelectionConfig,
+) -> Vec<usize> {
+    level
         .into_iter()
         .filter(|&k| {
-            angle_between_deg(&planes[k].plane.normal, &up) <= config.parallel_tolerance_deg
+            angle_between_deg(&planes[k].plane.normal, up) <= config.parallel_tolerance_deg
         })
         .filter(|&k| {
-            mount_height_m
-                .is_none_or(|h| (depth_below(k) - h).abs() <= config.ground_height_tolerance_m)
+            mount_height_m.is_none_or(|h| {
+                (depth_below(&planes[k], up) - h).abs() <= config.ground_height_tolerance_m
+            })
         })
-        .collect();
-    let lowest = family
+        .collect()
+}
+
+/// Step 4: the family member large enough to be the ground whose centroid
+/// lies farthest below the camera along `up` (ties: lowest index).
+fn lowest_member(
+    planes: &[PlaneSummary],
+    family: &[usize],
+    up: &Vector3<f64>,
+    config: &SelectionConfig,
+) -> Option<usize> {
+    let depth = |k: usize| depth_below(&planes[k], up);
+    family
         .iter()
         .copied()
         .filter(|&k| {
             planes[k].inliers >= config.ground_min_pixels
                 && planes[k].quality.area_m2 >= config.ground_min_area_m2
         })
-        .max_by(|&a, &b| depth_below(a).total_cmp(&depth_below(b)).then(b.cmp(&a)));
-    let Some(g) = lowest else {
-        return mounted.then_some(Ground::Mount);
-    };
+        .max_by(|&a, &b| depth(a).total_cmp(&depth(b)).then(b.cmp(&a)))
+}
+
+/// Step 5, the connected level of the ground `g`: family members join
+/// while they are coplanar with one that joined already; `g` first.
+fn ground_segments(
+    planes: &[PlaneSummary],
+    g: usize,
+    family: Vec<usize>,
+    config: &SelectionConfig,
+) -> Vec<usize> {
     let mut members = vec![g];
     let mut rest = family;
     rest.retain(|&k| k != g);
-    // The connected level of the ground: members join while they are
-    // coplanar with one that joined already.
     while let Some(pos) = rest.iter().position(|&k| {
         members
             .iter()
@@ -107,7 +160,17 @@ pub fn choose_ground(
     }) {
         members.push(rest.swap_remove(pos));
     }
-    Some(Ground::Planes(members))
+    members
+}
+
+/// Angle between a plane's normal and the reference up, degrees.
+fn tilt_deg(plane: &PlaneSummary, reference: &Vector3<f64>) -> f64 {
+    angle_between_deg(&plane.plane.normal, reference)
+}
+
+/// Height of a plane's centroid below the camera along `up`, metres.
+fn depth_below(plane: &PlaneSummary, up: &Vector3<f64>) -> f64 {
+    -up.dot(&plane.centroid)
 }
 
 /// Each plane's centroid within `coplanar_tolerance_m` of the other plane.
