@@ -24,10 +24,10 @@ use crate::literal::{
 };
 use crate::normals::NormalEstimator;
 use crate::pass_through::PassThrough;
-use crate::plane_fit::{fit_least_squares, fit_tls, Moments, Plane};
+use crate::plane_fit::{fit_least_squares, fit_tls, Plane};
 use crate::ransac_planes::{PlaneSegmenter, SegmentedPlane, Threshold};
 use crate::selection::{
-    axis_distance, select_ground, select_inclined, slope_sign, Ground, PlaneQuality, PlaneSummary,
+    axis_distance, select_ground, select_inclined, slope_sign, Ground, PlaneSegment, PlaneSummary,
     Selection,
 };
 use crate::statistical_outlier::StatisticalOutlierFilter;
@@ -688,94 +688,8 @@ fn finish(
     })
 }
 
-/// Merges the sorted `more` into the sorted `into` (segments' inliers are
-/// in pixel order, and so is their union: a merge, not a sort).
-fn merge_sorted(into: &mut Vec<u32>, more: &[u32]) {
-    if into
-        .last()
-        .is_none_or(|&last| more.first().is_none_or(|&f| last < f))
-    {
-        into.extend_from_slice(more);
-        return;
-    }
-    let old = std::mem::take(into);
-    into.reserve(old.len() + more.len());
-    let (mut a, mut b) = (old.as_slice(), more);
-    while let (Some(&x), Some(&y)) = (a.first(), b.first()) {
-        if x <= y {
-            into.push(x);
-            a = &a[1..];
-        } else {
-            into.push(y);
-            b = &b[1..];
-        }
-    }
-    into.extend_from_slice(a);
-    into.extend_from_slice(b);
-}
-
-/// The pixels of a chosen plane (one RANSAC plane, or the ground's
-/// segments together), their centroid and RMS distance from their plane.
-struct PlaneSegment<'a> {
-    inliers: &'a [u32],
-    centroid: Vector3<f64>,
-    rms_m: f64,
-    quality: PlaneQuality,
-    /// Moments of the pixels (their TLS and least-squares fits).
-    moments: Moments,
-}
-
-impl<'a> PlaneSegment<'a> {
-    /// One RANSAC plane.
-    fn of(plane: &'a SegmentedPlane, summary: &PlaneSummary) -> Self {
-        Self {
-            inliers: &plane.inliers,
-            centroid: plane.centroid,
-            rms_m: plane.rms_m,
-            quality: summary.quality,
-            moments: plane.moments,
-        }
-    }
-
-    /// The planes `members` together (the ground's segments): their pixels
-    /// in pixel order (into `pixels`), centroid, RMS and quality.
-    fn joined(
-        planes: &[SegmentedPlane],
-        summaries: &[PlaneSummary],
-        members: &[usize],
-        pixels: &'a mut Vec<u32>,
-    ) -> Self {
-        pixels.clear();
-        let mut centroid = Vector3::zeros();
-        let mut quality = PlaneQuality::default();
-        let (mut rms2, mut relative2, mut noise2) = (0.0, 0.0, 0.0);
-        let mut moments = Moments::new();
-        for &k in members {
-            let (p, q) = (&planes[k], &summaries[k].quality);
-            moments.merge(&p.moments);
-            merge_sorted(pixels, &p.inliers);
-            let n = p.inliers.len() as f64;
-            centroid += p.centroid * n;
-            rms2 += p.rms_m.powi(2) * n;
-            relative2 += q.relative_rms.powi(2) * n;
-            noise2 += q.noise_ratio.powi(2) * n;
-            quality.area_m2 += q.area_m2;
-            quality.border_fraction += q.border_fraction * n;
-        }
-        let n = pixels.len().max(1) as f64;
-        quality.rms_m = (rms2 / n).sqrt();
-        quality.relative_rms = (relative2 / n).sqrt();
-        quality.noise_ratio = (noise2 / n).sqrt();
-        quality.border_fraction /= n;
-        Self {
-            inliers: pixels,
-            centroid: centroid / n,
-            rms_m: quality.rms_m,
-            quality,
-            moments,
-        }
-    }
-
+/// The baseline fits and the estimate's parts from a chosen plane.
+impl PlaneSegment<'_> {
     /// A least-squares or TLS plane through the pixels, oriented towards
     /// the camera (from their moments: no pass over the pixels).
     fn fit(&self, method: SlopeMethod) -> Option<Plane> {
@@ -809,21 +723,3 @@ const _: fn() = || {
     fn assert_send<T: Send>() {}
     assert_send::<Estimator>();
 };
-
-#[cfg(test)]
-mod tests {
-    use super::merge_sorted;
-
-    /// The merge of sorted lists is their sorted union (the oracle: sort).
-    #[test]
-    fn merged_segments_are_in_pixel_order() {
-        let lists: [&[u32]; 4] = [&[5, 9, 40], &[1, 2, 41, 50], &[], &[60, 61]];
-        let mut merged = Vec::new();
-        for list in lists {
-            merge_sorted(&mut merged, list);
-        }
-        let mut sorted: Vec<u32> = lists.concat();
-        sorted.sort_unstable();
-        assert_eq!(merged, sorted);
-    }
-}

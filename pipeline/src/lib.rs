@@ -14,7 +14,7 @@
 //! | `cosine_kmeans.rs` | 5. cosine k-means, dominant cluster |
 //! | `cumulative_angle.rs` | 6. cumulative averaging of the angle |
 //! | `plane_fit.rs` | TLS and least-squares plane fits (baselines) |
-//! | `selection/` | plane quality; which plane is the ground, which the inclined plane; sign, distance |
+//! | `selection/` | plane quality; which plane is the ground, which the inclined plane; sign, distance; the chosen planes' pixels (the ground's segments joined) |
 //! | `sensor_noise.rs` | the depth sensor's noise, the yardstick of flatness |
 //! | `confidence.rs` | how far to trust an estimate, and why |
 //! | `tracking.rs` | the slope of the plane ahead followed over frames |
