@@ -4,7 +4,7 @@
 //! inclined selection -> per chosen plane: pass-through, normals, cosine
 //! k-means -> cumulative averaging of the angle. The baselines share
 //! everything up to the selection and then fit each chosen plane's RANSAC
-//! inliers by ordinary least squares or TLS.
+//! inliers by ordinary least squares or TLS (`baseline.rs`).
 
 use std::time::Instant;
 
@@ -13,6 +13,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use slope_ipc_types::{EstimateStatus, SlopeMethod};
 
+use crate::baseline::{baseline_fit, fit_plane};
 use crate::cloud::{angle_between_deg, is_measured, CloudView};
 use crate::confidence::{confidence, ChosenPlane};
 use crate::config::EstimatorConfig;
@@ -24,7 +25,7 @@ use crate::literal::{
 };
 use crate::normals::NormalEstimator;
 use crate::pass_through::PassThrough;
-use crate::plane_fit::{fit_least_squares, fit_tls, Plane};
+use crate::plane_fit::Plane;
 use crate::ransac_planes::{PlaneSegmenter, SegmentedPlane, Threshold};
 use crate::selection::{
     axis_distance, select_ground, select_inclined, slope_sign, Ground, PlaneSegment, PlaneSummary,
@@ -426,9 +427,8 @@ impl Estimator {
                 &members,
                 &mut self.ground_pixels,
             );
-            estimate.ground = segment
-                .fit(SlopeMethod::Tls)
-                .map(|plane| segment.estimate(&plane));
+            estimate.ground =
+                fit_plane(&segment, SlopeMethod::Tls).map(|plane| segment.estimate(&plane));
         }
         estimate
     }
@@ -459,12 +459,12 @@ fn segmented<'a>(
 }
 
 /// The planes a method fitted and the angle between them.
-struct Fit {
-    inclined: Option<Plane>,
-    ground: Option<Plane>,
-    angle_deg: f64,
-    std_deg: f64,
-    samples: u32,
+pub(crate) struct Fit {
+    pub(crate) inclined: Option<Plane>,
+    pub(crate) ground: Option<Plane>,
+    pub(crate) angle_deg: f64,
+    pub(crate) std_deg: f64,
+    pub(crate) samples: u32,
 }
 
 /// The buffers of the paper method's stages 3-6.
@@ -619,26 +619,6 @@ impl PaperStages {
     }
 }
 
-/// The least-squares or TLS baseline: each plane's inliers fitted.
-fn baseline_fit(
-    inclined: &PlaneSegment<'_>,
-    ground: Option<&PlaneSegment<'_>>,
-    selection: &Selection,
-    method: SlopeMethod,
-) -> Fit {
-    let incl_plane = inclined.fit(method);
-    let ground_plane = ground.and_then(|g| g.fit(method));
-    let up = ground_plane.map_or(selection.up, |g| g.normal);
-    Fit {
-        inclined: incl_plane,
-        ground: ground_plane,
-        angle_deg: incl_plane.map_or(f64::NAN, |p| angle_between_deg(&p.normal, &up)),
-        // One fit is one sample: it has no spread (not a spread of 0).
-        std_deg: f64::NAN,
-        samples: 1,
-    }
-}
-
 /// The estimate from a method's fit: sign, distance, planes and confidence
 /// (the paper method checked against a TLS fit of the same pixels).
 fn finish(
@@ -658,10 +638,9 @@ fn finish(
     let ground_plane = fit.ground.map(|p| p.oriented_towards(&Vector3::zeros()));
     let method_difference_deg = (method == SlopeMethod::Paper).then(|| {
         let up = ground.map_or(Some(selection.up), |g| {
-            g.fit(SlopeMethod::Tls).map(|p| p.normal)
+            fit_plane(g, SlopeMethod::Tls).map(|p| p.normal)
         });
-        let check = inclined
-            .fit(SlopeMethod::Tls)
+        let check = fit_plane(inclined, SlopeMethod::Tls)
             .zip(up)
             .map_or(f64::NAN, |(p, up)| angle_between_deg(&p.normal, &up));
         fit.angle_deg - check
@@ -688,19 +667,8 @@ fn finish(
     })
 }
 
-/// The baseline fits and the estimate's parts from a chosen plane.
+/// The estimate's parts from a chosen plane.
 impl PlaneSegment<'_> {
-    /// A least-squares or TLS plane through the pixels, oriented towards
-    /// the camera (from their moments: no pass over the pixels).
-    fn fit(&self, method: SlopeMethod) -> Option<Plane> {
-        let plane = if method == SlopeMethod::LeastSquares {
-            fit_least_squares(&self.moments)
-        } else {
-            fit_tls(&self.moments)
-        };
-        plane.map(|p| p.oriented_towards(&Vector3::zeros()))
-    }
-
     fn chosen(&self) -> ChosenPlane {
         ChosenPlane {
             pixels: self.inliers.len(),

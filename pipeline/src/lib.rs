@@ -14,6 +14,7 @@
 //! | `cosine_kmeans.rs` | 5. cosine k-means, dominant cluster |
 //! | `cumulative_angle.rs` | 6. cumulative averaging of the angle |
 //! | `plane_fit.rs` | TLS and least-squares plane fits (baselines) |
+//! | `baseline.rs` | the least-squares and TLS baselines: each chosen plane's pixels fitted by one plane |
 //! | `selection/` | plane quality; which plane is the ground, which the inclined plane; sign, distance; the chosen planes' pixels (the ground's segments joined) |
 //! | `sensor_noise.rs` | the depth sensor's noise, the yardstick of flatness |
 //! | `confidence.rs` | how far to trust an estimate, and why |
@@ -26,6 +27,7 @@
 // included": the NaN-safe reading is the point, not a style slip.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+mod baseline;
 pub mod cloud;
 pub mod confidence;
 pub mod config;
