@@ -7,7 +7,7 @@ use nalgebra::Vector3;
 use slope_ipc_types::SlopeMethod;
 
 use crate::cloud::angle_between_deg;
-use crate::estimator::Fit;
+use crate::finish::Fit;
 use crate::plane_fit::{fit_least_squares, fit_tls, Plane};
 use crate::selection::{PlaneSegment, Selection};
 

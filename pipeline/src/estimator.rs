@@ -5,6 +5,8 @@
 //! k-means -> cumulative averaging of the angle. The baselines share
 //! everything up to the selection and then fit each chosen plane's RANSAC
 //! inliers by ordinary least squares or TLS (`baseline.rs`).
+//! Either method's fit becomes the estimate (sign, distance, confidence)
+//! in `finish.rs`.
 
 use std::time::Instant;
 
@@ -14,11 +16,11 @@ use rand_chacha::ChaCha8Rng;
 use slope_ipc_types::{EstimateStatus, SlopeMethod};
 
 use crate::baseline::{baseline_fit, fit_plane};
-use crate::cloud::{angle_between_deg, is_measured, CloudView};
-use crate::confidence::{confidence, ChosenPlane};
+use crate::cloud::{is_measured, CloudView};
 use crate::config::EstimatorConfig;
 use crate::cosine_kmeans::CosineKmeans;
 use crate::cumulative_angle::{cumulative_angle, rotation_axis};
+use crate::finish::{finish, plane_estimate, Fit};
 use crate::literal::{
     DepthPassThrough, EveryPointRansac, KnnNormalEstimator, KnnOutlierFilter, NormalsNeighbourhood,
     OutlierNeighbourhood, PassThroughMode, RansacScoring,
@@ -28,8 +30,7 @@ use crate::pass_through::PassThrough;
 use crate::plane_fit::Plane;
 use crate::ransac_planes::{PlaneSegmenter, SegmentedPlane, Threshold};
 use crate::selection::{
-    axis_distance, select_ground, select_inclined, slope_sign, Ground, PlaneSegment, PlaneSummary,
-    Selection,
+    select_ground, select_inclined, Ground, PlaneSegment, PlaneSummary, Selection,
 };
 use crate::statistical_outlier::StatisticalOutlierFilter;
 use crate::tracking::{FrameSlope, SlopeTracker, TrackedSlope};
@@ -428,7 +429,7 @@ impl Estimator {
                 &mut self.ground_pixels,
             );
             estimate.ground =
-                fit_plane(&segment, SlopeMethod::Tls).map(|plane| segment.estimate(&plane));
+                fit_plane(&segment, SlopeMethod::Tls).map(|plane| plane_estimate(&segment, &plane));
         }
         estimate
     }
@@ -456,15 +457,6 @@ fn segmented<'a>(
         RansacScoring::SampleGrid => segmenter.planes(),
         RansacScoring::EveryPoint => every_point.planes(),
     }
-}
-
-/// The planes a method fitted and the angle between them.
-pub(crate) struct Fit {
-    pub(crate) inclined: Option<Plane>,
-    pub(crate) ground: Option<Plane>,
-    pub(crate) angle_deg: f64,
-    pub(crate) std_deg: f64,
-    pub(crate) samples: u32,
 }
 
 /// The buffers of the paper method's stages 3-6.
@@ -616,73 +608,6 @@ impl PaperStages {
         });
         clock.lap("kmeans");
         result
-    }
-}
-
-/// The estimate from a method's fit: sign, distance, planes and confidence
-/// (the paper method checked against a TLS fit of the same pixels).
-fn finish(
-    method: SlopeMethod,
-    fit: &Fit,
-    inclined: &PlaneSegment<'_>,
-    ground: Option<&PlaneSegment<'_>>,
-    selection: &Selection,
-) -> Result<Estimate, EstimateStatus> {
-    let incl_plane = fit
-        .inclined
-        .map(|p| p.oriented_towards(&Vector3::zeros()))
-        .ok_or(EstimateStatus::NoInclinedPlane)?;
-    if ground.is_some() && fit.ground.is_none() {
-        return Err(EstimateStatus::NoGround);
-    }
-    let ground_plane = fit.ground.map(|p| p.oriented_towards(&Vector3::zeros()));
-    let method_difference_deg = (method == SlopeMethod::Paper).then(|| {
-        let up = ground.map_or(Some(selection.up), |g| {
-            fit_plane(g, SlopeMethod::Tls).map(|p| p.normal)
-        });
-        let check = fit_plane(inclined, SlopeMethod::Tls)
-            .zip(up)
-            .map_or(f64::NAN, |(p, up)| angle_between_deg(&p.normal, &up));
-        fit.angle_deg - check
-    });
-    let confidence = confidence(
-        &inclined.chosen(),
-        ground.map(PlaneSegment::chosen).as_ref(),
-        method_difference_deg,
-    );
-    Ok(Estimate {
-        status: EstimateStatus::Ok,
-        method,
-        slope_deg: slope_sign(&incl_plane.normal, &selection.forward) * fit.angle_deg,
-        slope_std_deg: fit.std_deg,
-        samples: fit.samples,
-        distance_m: axis_distance(&incl_plane),
-        ground: ground_plane.zip(ground).map(|(p, g)| g.estimate(&p)),
-        inclined: Some(inclined.estimate(&incl_plane)),
-        ground_from_mount: ground.is_none(),
-        confidence: confidence.value,
-        confidence_reasons: confidence.reasons,
-        tracked: None,
-        timings: StageTimings::default(),
-    })
-}
-
-/// The estimate's parts from a chosen plane.
-impl PlaneSegment<'_> {
-    fn chosen(&self) -> ChosenPlane {
-        ChosenPlane {
-            pixels: self.inliers.len(),
-            quality: self.quality,
-        }
-    }
-
-    fn estimate(&self, plane: &Plane) -> PlaneEstimate {
-        PlaneEstimate {
-            coefficients: plane.coefficients(),
-            inliers: u32::try_from(self.inliers.len()).unwrap_or(u32::MAX),
-            rms_m: self.rms_m,
-            area_m2: self.quality.area_m2,
-        }
     }
 }
 

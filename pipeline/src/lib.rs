@@ -17,6 +17,7 @@
 //! | `baseline.rs` | the least-squares and TLS baselines: each chosen plane's pixels fitted by one plane |
 //! | `selection/` | plane quality; which plane is the ground, which the inclined plane; sign, distance; the chosen planes' pixels (the ground's segments joined) |
 //! | `sensor_noise.rs` | the depth sensor's noise, the yardstick of flatness |
+//! | `finish.rs` | the estimate from a method's fit: sign, distance, planes, confidence (the paper method checked against TLS) |
 //! | `confidence.rs` | how far to trust an estimate, and why |
 //! | `tracking.rs` | the slope of the plane ahead followed over frames |
 //! | `message.rs` | an estimate written into the `SlopeEstimate` message |
@@ -34,6 +35,7 @@ pub mod config;
 pub mod cosine_kmeans;
 pub mod cumulative_angle;
 pub mod estimator;
+mod finish;
 #[doc(hidden)]
 pub mod fixtures;
 pub mod literal;
