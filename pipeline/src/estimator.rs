@@ -30,7 +30,7 @@ use crate::pass_through::PassThrough;
 use crate::plane_fit::Plane;
 use crate::ransac_planes::{PlaneSegmenter, SegmentedPlane, Threshold};
 use crate::selection::{
-    select_ground, select_inclined, Ground, PlaneSegment, PlaneSummary, Selection,
+    chosen_segments, select_ground, select_inclined, Ground, PlaneSegment, PlaneSummary, Selection,
 };
 use crate::statistical_outlier::StatisticalOutlierFilter;
 use crate::tracking::{FrameSlope, SlopeTracker, TrackedSlope};
@@ -306,11 +306,7 @@ impl Estimator {
         frame_index: u64,
         clock: &mut Stopwatch,
     ) -> Result<Estimate, EstimateStatus> {
-        self.roles.ground.clear();
-        self.roles.inclined = None;
-        if let Some(seen) = &mut self.paper.inspected {
-            seen.clear();
-        }
+        self.forget_last_frame();
         if !cloud.is_well_formed() {
             return Err(EstimateStatus::BadFrame);
         }
@@ -318,51 +314,22 @@ impl Estimator {
         rng.set_stream(frame_index);
         self.remove_outliers(cloud)?;
         clock.lap("outlier");
-        match self.config.ransac.scoring {
-            RansacScoring::SampleGrid => {
-                self.segmenter
-                    .segment(cloud, &self.keep, &self.config.ransac, &mut rng);
-            }
-            RansacScoring::EveryPoint => {
-                self.every_point
-                    .segment(cloud, &self.keep, &self.config.ransac, &mut rng);
-            }
-        }
+        self.segment_planes(cloud, &mut rng);
         clock.lap("ransac");
-        self.summarize_planes(cloud);
-        let mount_up = cloud.mount.up_vector().map(Vector3::from);
-        let config = &self.config.selection;
-        let selection = select_ground(
-            &self.summaries,
-            mount_up,
-            Some(cloud.mount.height_m),
-            config,
-        )
-        .map(|ground| select_inclined(&self.summaries, ground, mount_up, config));
+        let selection = self.select(cloud);
         clock.lap("selection");
         let selection = match selection {
             None => return Err(EstimateStatus::NoGround),
             Some(Ok(selection)) => selection,
             Some(Err(ground)) => return Ok(self.ground_only(ground)),
         };
-        if let Ground::Planes(members) = &selection.ground {
-            self.roles.ground.extend_from_slice(members);
-        }
-        self.roles.inclined = Some(selection.inclined);
-        let planes = segmented(&self.segmenter, &self.every_point, &self.config);
-        let inclined = PlaneSegment::of(
-            &planes[selection.inclined],
-            &self.summaries[selection.inclined],
+        self.keep_roles(&selection);
+        let (inclined, ground) = chosen_segments(
+            segmented(&self.segmenter, &self.every_point, &self.config),
+            &self.summaries,
+            &selection,
+            &mut self.ground_pixels,
         );
-        let ground = match &selection.ground {
-            Ground::Planes(members) => Some(PlaneSegment::joined(
-                planes,
-                &self.summaries,
-                members,
-                &mut self.ground_pixels,
-            )),
-            Ground::Mount => None,
-        };
         let fit = match self.config.method {
             SlopeMethod::Paper => self.paper.fit(
                 cloud,
@@ -388,6 +355,53 @@ impl Estimator {
         )?;
         clock.lap("confidence");
         Ok(estimate)
+    }
+
+    /// Empties the roles and normals of the last frame ([`Self::inspection`]).
+    fn forget_last_frame(&mut self) {
+        self.roles.ground.clear();
+        self.roles.inclined = None;
+        if let Some(seen) = &mut self.paper.inspected {
+            seen.clear();
+        }
+    }
+
+    /// Stage 2 with the configured RANSAC (its planes: [`segmented`]).
+    fn segment_planes(&mut self, cloud: &CloudView<'_>, rng: &mut ChaCha8Rng) {
+        match self.config.ransac.scoring {
+            RansacScoring::SampleGrid => {
+                self.segmenter
+                    .segment(cloud, &self.keep, &self.config.ransac, rng);
+            }
+            RansacScoring::EveryPoint => {
+                self.every_point
+                    .segment(cloud, &self.keep, &self.config.ransac, rng);
+            }
+        }
+    }
+
+    /// The ground and the inclined plane among the segmented planes:
+    /// `None` without a ground, the ground alone (the error) without an
+    /// inclined plane.
+    fn select(&mut self, cloud: &CloudView<'_>) -> Option<Result<Selection, Ground>> {
+        self.summarize_planes(cloud);
+        let mount_up = cloud.mount.up_vector().map(Vector3::from);
+        let config = &self.config.selection;
+        select_ground(
+            &self.summaries,
+            mount_up,
+            Some(cloud.mount.height_m),
+            config,
+        )
+        .map(|ground| select_inclined(&self.summaries, ground, mount_up, config))
+    }
+
+    /// Keeps the selection's roles for [`Self::inspection`].
+    fn keep_roles(&mut self, selection: &Selection) {
+        if let Ground::Planes(members) = &selection.ground {
+            self.roles.ground.extend_from_slice(members);
+        }
+        self.roles.inclined = Some(selection.inclined);
     }
 
     /// Stage 1 into `self.keep`; too few points left is an error.

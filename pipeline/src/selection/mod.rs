@@ -45,7 +45,7 @@ pub use config::SelectionConfig;
 pub use ground::Ground;
 pub use inclined::{axis_distance, forward_direction, slope_sign};
 pub use quality::{plane_quality, PlaneQuality};
-pub(crate) use segment::PlaneSegment;
+pub(crate) use segment::{chosen_segments, PlaneSegment};
 
 /// What selection needs to know about a segmented plane.
 #[derive(Debug, Clone, Copy, PartialEq)]

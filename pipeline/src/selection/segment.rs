@@ -5,7 +5,7 @@
 use nalgebra::Vector3;
 
 use super::quality::PooledQuality;
-use super::{PlaneQuality, PlaneSummary};
+use super::{Ground, PlaneQuality, PlaneSummary, Selection};
 use crate::plane_fit::Moments;
 use crate::ransac_planes::SegmentedPlane;
 
@@ -62,6 +62,28 @@ impl<'a> PlaneSegment<'a> {
             moments,
         }
     }
+}
+
+/// The selection's chosen planes among `planes`: the inclined plane, and
+/// the ground's segments joined (their pixels into `ground_pixels`; `None`
+/// for a ground from the mount).
+pub(crate) fn chosen_segments<'a>(
+    planes: &'a [SegmentedPlane],
+    summaries: &[PlaneSummary],
+    selection: &Selection,
+    ground_pixels: &'a mut Vec<u32>,
+) -> (PlaneSegment<'a>, Option<PlaneSegment<'a>>) {
+    let inclined = PlaneSegment::of(&planes[selection.inclined], &summaries[selection.inclined]);
+    let ground = match &selection.ground {
+        Ground::Planes(members) => Some(PlaneSegment::joined(
+            planes,
+            summaries,
+            members,
+            ground_pixels,
+        )),
+        Ground::Mount => None,
+    };
+    (inclined, ground)
 }
 
 /// Merges the sorted `more` into the sorted `into` (segments' inliers are
