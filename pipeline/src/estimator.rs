@@ -17,7 +17,7 @@ use slope_ipc_types::{EstimateStatus, SlopeMethod};
 
 use crate::baseline::{baseline_fit, fit_plane};
 use crate::cloud::{is_measured, CloudView};
-use crate::config::EstimatorConfig;
+use crate::config::{EstimatorConfig, NormalsConfig, PassThroughConfig};
 use crate::cosine_kmeans::CosineKmeans;
 use crate::cumulative_angle::{cumulative_angle, rotation_axis};
 use crate::finish::{finish, plane_estimate, Fit};
@@ -476,10 +476,8 @@ fn segmented<'a>(
 /// The buffers of the paper method's stages 3-6.
 #[derive(Debug, Clone, Default)]
 struct PaperStages {
-    pass_through: PassThrough,
-    depth_pass_through: DepthPassThrough,
-    normals: NormalEstimator,
-    knn_normals: KnnNormalEstimator,
+    pass_through: PassThroughStage,
+    normals: NormalsStage,
     kmeans: CosineKmeans,
     ground_normals: Vec<Vector3<f64>>,
     inclined_normals: Vec<Vector3<f64>>,
@@ -557,45 +555,13 @@ impl PaperStages {
             &mut self.ground_normals
         };
         out.clear();
-        let inliers = segment.inliers;
-        let max_points = config.pass_through.max_points;
-        // The depth cut is the plane from here on (the paper); the
-        // surface-uniform sample's normals see all its points.
-        let (members, support) = match config.pass_through.mode {
-            PassThroughMode::SurfaceUniform => {
-                let (kept, _) = self.pass_through.filter(cloud.points, inliers, max_points);
-                (kept, inliers)
-            }
-            PassThroughMode::Depth => {
-                let kept = self
-                    .depth_pass_through
-                    .filter(cloud.points, inliers, max_points);
-                (kept, kept)
-            }
-        };
+        let (members, support) =
+            self.pass_through
+                .filter(cloud, segment.inliers, &config.pass_through);
         clock.lap("pass_through");
-        // The patch grows with the plane's own noise.
-        let normals_config = config.normals.for_plane_noise(segment.rms_m);
-        let found = match config.normals.neighbourhood {
-            NormalsNeighbourhood::Window => {
-                self.normals
-                    .estimate_with_support(
-                        cloud,
-                        members,
-                        support,
-                        &normals_config,
-                        &Vector3::zeros(),
-                    )
-                    .0
-            }
-            NormalsNeighbourhood::KdTree => self.knn_normals.estimate(
-                cloud,
-                members,
-                support,
-                &normals_config,
-                &Vector3::zeros(),
-            ),
-        };
+        let found = self
+            .normals
+            .estimate(cloud, members, support, segment.rms_m, &config.normals);
         clock.lap("normals");
         let clustering = self.kmeans.cluster(
             found,
@@ -605,16 +571,7 @@ impl PaperStages {
         );
         if let (Some(seen), Some(c)) = (&mut self.inspected, &clustering) {
             let flags = self.kmeans.kept_flags(found, c);
-            for ((&pixel, n), kept) in members.iter().zip(found).zip(flags) {
-                if n.iter().all(|x| x.is_finite()) {
-                    seen.push(InspectedNormal {
-                        pixel,
-                        normal: [n.x as f32, n.y as f32, n.z as f32],
-                        kept,
-                        inclined,
-                    });
-                }
-            }
+            inspect_normals(seen, members, found, flags, inclined);
         }
         let result = clustering.and_then(|c| {
             out.extend(self.kmeans.kept_members(&c).copied());
@@ -622,6 +579,102 @@ impl PaperStages {
         });
         clock.lap("kmeans");
         result
+    }
+}
+
+/// Stage 3, ours (surface-uniform) or the paper's as written (depth).
+#[derive(Debug, Clone, Default)]
+struct PassThroughStage {
+    surface_uniform: PassThrough,
+    depth: DepthPassThrough,
+}
+
+impl PassThroughStage {
+    /// The points of `inliers` kept, and the points their normals take
+    /// their neighbourhoods from. The depth cut is the plane from here on
+    /// (the paper); the surface-uniform sample's normals see all its
+    /// points.
+    fn filter<'a>(
+        &'a mut self,
+        cloud: &CloudView<'_>,
+        inliers: &'a [u32],
+        config: &PassThroughConfig,
+    ) -> (&'a [u32], &'a [u32]) {
+        let max_points = config.max_points;
+        match config.mode {
+            PassThroughMode::SurfaceUniform => {
+                let (kept, _) = self
+                    .surface_uniform
+                    .filter(cloud.points, inliers, max_points);
+                (kept, inliers)
+            }
+            PassThroughMode::Depth => {
+                let kept = self.depth.filter(cloud.points, inliers, max_points);
+                (kept, kept)
+            }
+        }
+    }
+}
+
+/// Stage 4, ours (summed-area windows) or the paper's as written (k-d
+/// tree).
+#[derive(Debug, Clone, Default)]
+struct NormalsStage {
+    window: NormalEstimator,
+    kd_tree: KnnNormalEstimator,
+}
+
+impl NormalsStage {
+    /// The normals at `members` from the neighbourhoods among `support`,
+    /// oriented towards the camera, on a patch that grows with the plane's
+    /// own noise (`rms_m`).
+    fn estimate(
+        &mut self,
+        cloud: &CloudView<'_>,
+        members: &[u32],
+        support: &[u32],
+        rms_m: f64,
+        config: &NormalsConfig,
+    ) -> &[Vector3<f64>] {
+        let normals_config = config.for_plane_noise(rms_m);
+        match config.neighbourhood {
+            NormalsNeighbourhood::Window => {
+                self.window
+                    .estimate_with_support(
+                        cloud,
+                        members,
+                        support,
+                        &normals_config,
+                        &Vector3::zeros(),
+                    )
+                    .0
+            }
+            NormalsNeighbourhood::KdTree => {
+                self.kd_tree
+                    .estimate(cloud, members, support, &normals_config, &Vector3::zeros())
+            }
+        }
+    }
+}
+
+/// Keeps a plane's finite normals for [`Inspection`], each with the
+/// k-means verdict (`kept`, one flag per normal in `found`).
+fn inspect_normals(
+    seen: &mut Vec<InspectedNormal>,
+    members: &[u32],
+    found: &[Vector3<f64>],
+    kept: impl Iterator<Item = bool>,
+    inclined: bool,
+) {
+    for ((&pixel, n), kept) in members.iter().zip(found).zip(kept) {
+        if n.iter().all(|x| x.is_finite()) {
+            seen.push(InspectedNormal {
+                pixel,
+                normal: [n.x as f32, n.y as f32, n.z as f32],
+                kept,
+                inclined,
+            });
+        }
     }
 }
 
