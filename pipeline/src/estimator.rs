@@ -15,12 +15,12 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use slope_ipc_types::{EstimateStatus, SlopeMethod};
 
-use crate::baseline::{baseline_fit, fit_plane};
+use crate::baseline::baseline_fit;
 use crate::cloud::{is_measured, CloudView};
 use crate::config::{EstimatorConfig, NormalsConfig, PassThroughConfig};
 use crate::cosine_kmeans::CosineKmeans;
 use crate::cumulative_angle::{cumulative_angle, rotation_axis};
-use crate::finish::{finish, plane_estimate, Fit};
+use crate::finish::{finish, flat_ground_estimate, Fit};
 use crate::literal::{
     DepthPassThrough, EveryPointRansac, KnnNormalEstimator, KnnOutlierFilter, NormalsNeighbourhood,
     OutlierNeighbourhood, PassThroughMode, RansacScoring,
@@ -442,8 +442,7 @@ impl Estimator {
                 &members,
                 &mut self.ground_pixels,
             );
-            estimate.ground =
-                fit_plane(&segment, SlopeMethod::Tls).map(|plane| plane_estimate(&segment, &plane));
+            estimate.ground = flat_ground_estimate(&segment);
         }
         estimate
     }

@@ -1,7 +1,8 @@
 //! The estimate from a method's fit: the planes oriented towards the
 //! camera, the slope's sign, the distance to the inclined plane along the
 //! optical axis, and the confidence (the paper method checked against a
-//! TLS fit of the same pixels).
+//! TLS fit of the same pixels); without an inclined plane, the ground's
+//! TLS fit.
 
 use nalgebra::Vector3;
 use slope_ipc_types::{EstimateStatus, SlopeMethod};
@@ -70,9 +71,15 @@ pub(crate) fn finish(
     })
 }
 
+/// The ground in an estimate without an inclined plane (a flat floor
+/// ahead): its TLS fit, whatever the method.
+pub(crate) fn flat_ground_estimate(ground: &PlaneSegment<'_>) -> Option<PlaneEstimate> {
+    fit_plane(ground, SlopeMethod::Tls).map(|plane| plane_estimate(ground, &plane))
+}
+
 /// A chosen plane in the estimate: `plane` (a fit of the segment's
 /// pixels), with the segment's inliers, RMS and area.
-pub(crate) fn plane_estimate(segment: &PlaneSegment<'_>, plane: &Plane) -> PlaneEstimate {
+fn plane_estimate(segment: &PlaneSegment<'_>, plane: &Plane) -> PlaneEstimate {
     PlaneEstimate {
         coefficients: plane.coefficients(),
         inliers: u32::try_from(segment.inliers.len()).unwrap_or(u32::MAX),
