@@ -4,7 +4,9 @@
 //! inclined selection -> per chosen plane: pass-through, normals, cosine
 //! k-means -> cumulative averaging of the angle. The baselines share
 //! everything up to the selection and then fit each chosen plane's RANSAC
-//! inliers by ordinary least squares or TLS.
+//! inliers by ordinary least squares or TLS (`baseline.rs`).
+//! Either method's fit becomes the estimate (sign, distance, confidence)
+//! in `finish.rs`.
 
 use std::time::Instant;
 
@@ -13,22 +15,22 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use slope_ipc_types::{EstimateStatus, SlopeMethod};
 
-use crate::cloud::{angle_between_deg, is_measured, CloudView};
-use crate::confidence::{confidence, ChosenPlane};
-use crate::config::EstimatorConfig;
+use crate::baseline::baseline_fit;
+use crate::cloud::{is_measured, CloudView};
+use crate::config::{EstimatorConfig, NormalsConfig, PassThroughConfig};
 use crate::cosine_kmeans::CosineKmeans;
 use crate::cumulative_angle::{cumulative_angle, rotation_axis};
+use crate::finish::{finish, flat_ground_estimate, Fit};
 use crate::literal::{
     DepthPassThrough, EveryPointRansac, KnnNormalEstimator, KnnOutlierFilter, NormalsNeighbourhood,
     OutlierNeighbourhood, PassThroughMode, RansacScoring,
 };
 use crate::normals::NormalEstimator;
 use crate::pass_through::PassThrough;
-use crate::plane_fit::{fit_least_squares, fit_tls, Moments, Plane};
+use crate::plane_fit::Plane;
 use crate::ransac_planes::{PlaneSegmenter, SegmentedPlane, Threshold};
 use crate::selection::{
-    axis_distance, select_ground, select_inclined, slope_sign, Ground, PlaneQuality, PlaneSummary,
-    Selection,
+    chosen_segments, select_ground, select_inclined, Ground, PlaneSegment, PlaneSummary, Selection,
 };
 use crate::statistical_outlier::StatisticalOutlierFilter;
 use crate::tracking::{FrameSlope, SlopeTracker, TrackedSlope};
@@ -304,11 +306,7 @@ impl Estimator {
         frame_index: u64,
         clock: &mut Stopwatch,
     ) -> Result<Estimate, EstimateStatus> {
-        self.roles.ground.clear();
-        self.roles.inclined = None;
-        if let Some(seen) = &mut self.paper.inspected {
-            seen.clear();
-        }
+        self.forget_last_frame();
         if !cloud.is_well_formed() {
             return Err(EstimateStatus::BadFrame);
         }
@@ -316,51 +314,22 @@ impl Estimator {
         rng.set_stream(frame_index);
         self.remove_outliers(cloud)?;
         clock.lap("outlier");
-        match self.config.ransac.scoring {
-            RansacScoring::SampleGrid => {
-                self.segmenter
-                    .segment(cloud, &self.keep, &self.config.ransac, &mut rng);
-            }
-            RansacScoring::EveryPoint => {
-                self.every_point
-                    .segment(cloud, &self.keep, &self.config.ransac, &mut rng);
-            }
-        }
+        self.segment_planes(cloud, &mut rng);
         clock.lap("ransac");
-        self.summarize_planes(cloud);
-        let mount_up = cloud.mount.up_vector().map(Vector3::from);
-        let config = &self.config.selection;
-        let selection = select_ground(
-            &self.summaries,
-            mount_up,
-            Some(cloud.mount.height_m),
-            config,
-        )
-        .map(|ground| select_inclined(&self.summaries, ground, mount_up, config));
+        let selection = self.select(cloud);
         clock.lap("selection");
         let selection = match selection {
             None => return Err(EstimateStatus::NoGround),
             Some(Ok(selection)) => selection,
             Some(Err(ground)) => return Ok(self.ground_only(ground)),
         };
-        if let Ground::Planes(members) = &selection.ground {
-            self.roles.ground.extend_from_slice(members);
-        }
-        self.roles.inclined = Some(selection.inclined);
-        let planes = segmented(&self.segmenter, &self.every_point, &self.config);
-        let inclined = PlaneSegment::of(
-            &planes[selection.inclined],
-            &self.summaries[selection.inclined],
+        self.keep_roles(&selection);
+        let (inclined, ground) = chosen_segments(
+            segmented(&self.segmenter, &self.every_point, &self.config),
+            &self.summaries,
+            &selection,
+            &mut self.ground_pixels,
         );
-        let ground = match &selection.ground {
-            Ground::Planes(members) => Some(PlaneSegment::joined(
-                planes,
-                &self.summaries,
-                members,
-                &mut self.ground_pixels,
-            )),
-            Ground::Mount => None,
-        };
         let fit = match self.config.method {
             SlopeMethod::Paper => self.paper.fit(
                 cloud,
@@ -386,6 +355,53 @@ impl Estimator {
         )?;
         clock.lap("confidence");
         Ok(estimate)
+    }
+
+    /// Empties the roles and normals of the last frame ([`Self::inspection`]).
+    fn forget_last_frame(&mut self) {
+        self.roles.ground.clear();
+        self.roles.inclined = None;
+        if let Some(seen) = &mut self.paper.inspected {
+            seen.clear();
+        }
+    }
+
+    /// Stage 2 with the configured RANSAC (its planes: [`segmented`]).
+    fn segment_planes(&mut self, cloud: &CloudView<'_>, rng: &mut ChaCha8Rng) {
+        match self.config.ransac.scoring {
+            RansacScoring::SampleGrid => {
+                self.segmenter
+                    .segment(cloud, &self.keep, &self.config.ransac, rng);
+            }
+            RansacScoring::EveryPoint => {
+                self.every_point
+                    .segment(cloud, &self.keep, &self.config.ransac, rng);
+            }
+        }
+    }
+
+    /// The ground and the inclined plane among the segmented planes:
+    /// `None` without a ground, the ground alone (the error) without an
+    /// inclined plane.
+    fn select(&mut self, cloud: &CloudView<'_>) -> Option<Result<Selection, Ground>> {
+        self.summarize_planes(cloud);
+        let mount_up = cloud.mount.up_vector().map(Vector3::from);
+        let config = &self.config.selection;
+        select_ground(
+            &self.summaries,
+            mount_up,
+            Some(cloud.mount.height_m),
+            config,
+        )
+        .map(|ground| select_inclined(&self.summaries, ground, mount_up, config))
+    }
+
+    /// Keeps the selection's roles for [`Self::inspection`].
+    fn keep_roles(&mut self, selection: &Selection) {
+        if let Ground::Planes(members) = &selection.ground {
+            self.roles.ground.extend_from_slice(members);
+        }
+        self.roles.inclined = Some(selection.inclined);
     }
 
     /// Stage 1 into `self.keep`; too few points left is an error.
@@ -426,9 +442,7 @@ impl Estimator {
                 &members,
                 &mut self.ground_pixels,
             );
-            estimate.ground = segment
-                .fit(SlopeMethod::Tls)
-                .map(|plane| segment.estimate(&plane));
+            estimate.ground = flat_ground_estimate(&segment);
         }
         estimate
     }
@@ -458,22 +472,11 @@ fn segmented<'a>(
     }
 }
 
-/// The planes a method fitted and the angle between them.
-struct Fit {
-    inclined: Option<Plane>,
-    ground: Option<Plane>,
-    angle_deg: f64,
-    std_deg: f64,
-    samples: u32,
-}
-
 /// The buffers of the paper method's stages 3-6.
 #[derive(Debug, Clone, Default)]
 struct PaperStages {
-    pass_through: PassThrough,
-    depth_pass_through: DepthPassThrough,
-    normals: NormalEstimator,
-    knn_normals: KnnNormalEstimator,
+    pass_through: PassThroughStage,
+    normals: NormalsStage,
     kmeans: CosineKmeans,
     ground_normals: Vec<Vector3<f64>>,
     inclined_normals: Vec<Vector3<f64>>,
@@ -551,45 +554,13 @@ impl PaperStages {
             &mut self.ground_normals
         };
         out.clear();
-        let inliers = segment.inliers;
-        let max_points = config.pass_through.max_points;
-        // The depth cut is the plane from here on (the paper); the
-        // surface-uniform sample's normals see all its points.
-        let (members, support) = match config.pass_through.mode {
-            PassThroughMode::SurfaceUniform => {
-                let (kept, _) = self.pass_through.filter(cloud.points, inliers, max_points);
-                (kept, inliers)
-            }
-            PassThroughMode::Depth => {
-                let kept = self
-                    .depth_pass_through
-                    .filter(cloud.points, inliers, max_points);
-                (kept, kept)
-            }
-        };
+        let (members, support) =
+            self.pass_through
+                .filter(cloud, segment.inliers, &config.pass_through);
         clock.lap("pass_through");
-        // The patch grows with the plane's own noise.
-        let normals_config = config.normals.for_plane_noise(segment.rms_m);
-        let found = match config.normals.neighbourhood {
-            NormalsNeighbourhood::Window => {
-                self.normals
-                    .estimate_with_support(
-                        cloud,
-                        members,
-                        support,
-                        &normals_config,
-                        &Vector3::zeros(),
-                    )
-                    .0
-            }
-            NormalsNeighbourhood::KdTree => self.knn_normals.estimate(
-                cloud,
-                members,
-                support,
-                &normals_config,
-                &Vector3::zeros(),
-            ),
-        };
+        let found = self
+            .normals
+            .estimate(cloud, members, support, segment.rms_m, &config.normals);
         clock.lap("normals");
         let clustering = self.kmeans.cluster(
             found,
@@ -599,16 +570,7 @@ impl PaperStages {
         );
         if let (Some(seen), Some(c)) = (&mut self.inspected, &clustering) {
             let flags = self.kmeans.kept_flags(found, c);
-            for ((&pixel, n), kept) in members.iter().zip(found).zip(flags) {
-                if n.iter().all(|x| x.is_finite()) {
-                    seen.push(InspectedNormal {
-                        pixel,
-                        normal: [n.x as f32, n.y as f32, n.z as f32],
-                        kept,
-                        inclined,
-                    });
-                }
-            }
+            inspect_normals(seen, members, found, flags, inclined);
         }
         let result = clustering.and_then(|c| {
             out.extend(self.kmeans.kept_members(&c).copied());
@@ -619,187 +581,98 @@ impl PaperStages {
     }
 }
 
-/// The least-squares or TLS baseline: each plane's inliers fitted.
-fn baseline_fit(
-    inclined: &PlaneSegment<'_>,
-    ground: Option<&PlaneSegment<'_>>,
-    selection: &Selection,
-    method: SlopeMethod,
-) -> Fit {
-    let incl_plane = inclined.fit(method);
-    let ground_plane = ground.and_then(|g| g.fit(method));
-    let up = ground_plane.map_or(selection.up, |g| g.normal);
-    Fit {
-        inclined: incl_plane,
-        ground: ground_plane,
-        angle_deg: incl_plane.map_or(f64::NAN, |p| angle_between_deg(&p.normal, &up)),
-        // One fit is one sample: it has no spread (not a spread of 0).
-        std_deg: f64::NAN,
-        samples: 1,
+/// Stage 3, ours (surface-uniform) or the paper's as written (depth).
+#[derive(Debug, Clone, Default)]
+struct PassThroughStage {
+    surface_uniform: PassThrough,
+    depth: DepthPassThrough,
+}
+
+impl PassThroughStage {
+    /// The points of `inliers` kept, and the points their normals take
+    /// their neighbourhoods from. The depth cut is the plane from here on
+    /// (the paper); the surface-uniform sample's normals see all its
+    /// points.
+    fn filter<'a>(
+        &'a mut self,
+        cloud: &CloudView<'_>,
+        inliers: &'a [u32],
+        config: &PassThroughConfig,
+    ) -> (&'a [u32], &'a [u32]) {
+        let max_points = config.max_points;
+        match config.mode {
+            PassThroughMode::SurfaceUniform => {
+                let (kept, _) = self
+                    .surface_uniform
+                    .filter(cloud.points, inliers, max_points);
+                (kept, inliers)
+            }
+            PassThroughMode::Depth => {
+                let kept = self.depth.filter(cloud.points, inliers, max_points);
+                (kept, kept)
+            }
+        }
     }
 }
 
-/// The estimate from a method's fit: sign, distance, planes and confidence
-/// (the paper method checked against a TLS fit of the same pixels).
-fn finish(
-    method: SlopeMethod,
-    fit: &Fit,
-    inclined: &PlaneSegment<'_>,
-    ground: Option<&PlaneSegment<'_>>,
-    selection: &Selection,
-) -> Result<Estimate, EstimateStatus> {
-    let incl_plane = fit
-        .inclined
-        .map(|p| p.oriented_towards(&Vector3::zeros()))
-        .ok_or(EstimateStatus::NoInclinedPlane)?;
-    if ground.is_some() && fit.ground.is_none() {
-        return Err(EstimateStatus::NoGround);
-    }
-    let ground_plane = fit.ground.map(|p| p.oriented_towards(&Vector3::zeros()));
-    let method_difference_deg = (method == SlopeMethod::Paper).then(|| {
-        let up = ground.map_or(Some(selection.up), |g| {
-            g.fit(SlopeMethod::Tls).map(|p| p.normal)
-        });
-        let check = inclined
-            .fit(SlopeMethod::Tls)
-            .zip(up)
-            .map_or(f64::NAN, |(p, up)| angle_between_deg(&p.normal, &up));
-        fit.angle_deg - check
-    });
-    let confidence = confidence(
-        &inclined.chosen(),
-        ground.map(PlaneSegment::chosen).as_ref(),
-        method_difference_deg,
-    );
-    Ok(Estimate {
-        status: EstimateStatus::Ok,
-        method,
-        slope_deg: slope_sign(&incl_plane.normal, &selection.forward) * fit.angle_deg,
-        slope_std_deg: fit.std_deg,
-        samples: fit.samples,
-        distance_m: axis_distance(&incl_plane),
-        ground: ground_plane.zip(ground).map(|(p, g)| g.estimate(&p)),
-        inclined: Some(inclined.estimate(&incl_plane)),
-        ground_from_mount: ground.is_none(),
-        confidence: confidence.value,
-        confidence_reasons: confidence.reasons,
-        tracked: None,
-        timings: StageTimings::default(),
-    })
+/// Stage 4, ours (summed-area windows) or the paper's as written (k-d
+/// tree).
+#[derive(Debug, Clone, Default)]
+struct NormalsStage {
+    window: NormalEstimator,
+    kd_tree: KnnNormalEstimator,
 }
 
-/// Merges the sorted `more` into the sorted `into` (segments' inliers are
-/// in pixel order, and so is their union: a merge, not a sort).
-fn merge_sorted(into: &mut Vec<u32>, more: &[u32]) {
-    if into
-        .last()
-        .is_none_or(|&last| more.first().is_none_or(|&f| last < f))
-    {
-        into.extend_from_slice(more);
-        return;
-    }
-    let old = std::mem::take(into);
-    into.reserve(old.len() + more.len());
-    let (mut a, mut b) = (old.as_slice(), more);
-    while let (Some(&x), Some(&y)) = (a.first(), b.first()) {
-        if x <= y {
-            into.push(x);
-            a = &a[1..];
-        } else {
-            into.push(y);
-            b = &b[1..];
+impl NormalsStage {
+    /// The normals at `members` from the neighbourhoods among `support`,
+    /// oriented towards the camera, on a patch that grows with the plane's
+    /// own noise (`rms_m`).
+    fn estimate(
+        &mut self,
+        cloud: &CloudView<'_>,
+        members: &[u32],
+        support: &[u32],
+        rms_m: f64,
+        config: &NormalsConfig,
+    ) -> &[Vector3<f64>] {
+        let normals_config = config.for_plane_noise(rms_m);
+        match config.neighbourhood {
+            NormalsNeighbourhood::Window => {
+                self.window
+                    .estimate_with_support(
+                        cloud,
+                        members,
+                        support,
+                        &normals_config,
+                        &Vector3::zeros(),
+                    )
+                    .0
+            }
+            NormalsNeighbourhood::KdTree => {
+                self.kd_tree
+                    .estimate(cloud, members, support, &normals_config, &Vector3::zeros())
+            }
         }
     }
-    into.extend_from_slice(a);
-    into.extend_from_slice(b);
 }
 
-/// The pixels of a chosen plane (one RANSAC plane, or the ground's
-/// segments together), their centroid and RMS distance from their plane.
-struct PlaneSegment<'a> {
-    inliers: &'a [u32],
-    centroid: Vector3<f64>,
-    rms_m: f64,
-    quality: PlaneQuality,
-    /// Moments of the pixels (their TLS and least-squares fits).
-    moments: Moments,
-}
-
-impl<'a> PlaneSegment<'a> {
-    /// One RANSAC plane.
-    fn of(plane: &'a SegmentedPlane, summary: &PlaneSummary) -> Self {
-        Self {
-            inliers: &plane.inliers,
-            centroid: plane.centroid,
-            rms_m: plane.rms_m,
-            quality: summary.quality,
-            moments: plane.moments,
-        }
-    }
-
-    /// The planes `members` together (the ground's segments): their pixels
-    /// in pixel order (into `pixels`), centroid, RMS and quality.
-    fn joined(
-        planes: &[SegmentedPlane],
-        summaries: &[PlaneSummary],
-        members: &[usize],
-        pixels: &'a mut Vec<u32>,
-    ) -> Self {
-        pixels.clear();
-        let mut centroid = Vector3::zeros();
-        let mut quality = PlaneQuality::default();
-        let (mut rms2, mut relative2, mut noise2) = (0.0, 0.0, 0.0);
-        let mut moments = Moments::new();
-        for &k in members {
-            let (p, q) = (&planes[k], &summaries[k].quality);
-            moments.merge(&p.moments);
-            merge_sorted(pixels, &p.inliers);
-            let n = p.inliers.len() as f64;
-            centroid += p.centroid * n;
-            rms2 += p.rms_m.powi(2) * n;
-            relative2 += q.relative_rms.powi(2) * n;
-            noise2 += q.noise_ratio.powi(2) * n;
-            quality.area_m2 += q.area_m2;
-            quality.border_fraction += q.border_fraction * n;
-        }
-        let n = pixels.len().max(1) as f64;
-        quality.rms_m = (rms2 / n).sqrt();
-        quality.relative_rms = (relative2 / n).sqrt();
-        quality.noise_ratio = (noise2 / n).sqrt();
-        quality.border_fraction /= n;
-        Self {
-            inliers: pixels,
-            centroid: centroid / n,
-            rms_m: quality.rms_m,
-            quality,
-            moments,
-        }
-    }
-
-    /// A least-squares or TLS plane through the pixels, oriented towards
-    /// the camera (from their moments: no pass over the pixels).
-    fn fit(&self, method: SlopeMethod) -> Option<Plane> {
-        let plane = if method == SlopeMethod::LeastSquares {
-            fit_least_squares(&self.moments)
-        } else {
-            fit_tls(&self.moments)
-        };
-        plane.map(|p| p.oriented_towards(&Vector3::zeros()))
-    }
-
-    fn chosen(&self) -> ChosenPlane {
-        ChosenPlane {
-            pixels: self.inliers.len(),
-            quality: self.quality,
-        }
-    }
-
-    fn estimate(&self, plane: &Plane) -> PlaneEstimate {
-        PlaneEstimate {
-            coefficients: plane.coefficients(),
-            inliers: u32::try_from(self.inliers.len()).unwrap_or(u32::MAX),
-            rms_m: self.rms_m,
-            area_m2: self.quality.area_m2,
+/// Keeps a plane's finite normals for [`Inspection`], each with the
+/// k-means verdict (`kept`, one flag per normal in `found`).
+fn inspect_normals(
+    seen: &mut Vec<InspectedNormal>,
+    members: &[u32],
+    found: &[Vector3<f64>],
+    kept: impl Iterator<Item = bool>,
+    inclined: bool,
+) {
+    for ((&pixel, n), kept) in members.iter().zip(found).zip(kept) {
+        if n.iter().all(|x| x.is_finite()) {
+            seen.push(InspectedNormal {
+                pixel,
+                normal: [n.x as f32, n.y as f32, n.z as f32],
+                kept,
+                inclined,
+            });
         }
     }
 }
@@ -809,21 +682,3 @@ const _: fn() = || {
     fn assert_send<T: Send>() {}
     assert_send::<Estimator>();
 };
-
-#[cfg(test)]
-mod tests {
-    use super::merge_sorted;
-
-    /// The merge of sorted lists is their sorted union (the oracle: sort).
-    #[test]
-    fn merged_segments_are_in_pixel_order() {
-        let lists: [&[u32]; 4] = [&[5, 9, 40], &[1, 2, 41, 50], &[], &[60, 61]];
-        let mut merged = Vec::new();
-        for list in lists {
-            merge_sorted(&mut merged, list);
-        }
-        let mut sorted: Vec<u32> = lists.concat();
-        sorted.sort_unstable();
-        assert_eq!(merged, sorted);
-    }
-}

@@ -14,8 +14,10 @@
 //! | `cosine_kmeans.rs` | 5. cosine k-means, dominant cluster |
 //! | `cumulative_angle.rs` | 6. cumulative averaging of the angle |
 //! | `plane_fit.rs` | TLS and least-squares plane fits (baselines) |
-//! | `selection/` | plane quality; which plane is the ground, which the inclined plane; sign, distance |
+//! | `baseline.rs` | the least-squares and TLS baselines: each chosen plane's pixels fitted by one plane |
+//! | `selection/` | plane quality; which plane is the ground, which the inclined plane; sign, distance; the chosen planes' pixels (the ground's segments joined) |
 //! | `sensor_noise.rs` | the depth sensor's noise, the yardstick of flatness |
+//! | `finish.rs` | the estimate from a method's fit: sign, distance, planes, confidence (the paper method checked against TLS) |
 //! | `confidence.rs` | how far to trust an estimate, and why |
 //! | `tracking.rs` | the slope of the plane ahead followed over frames |
 //! | `message.rs` | an estimate written into the `SlopeEstimate` message |
@@ -26,12 +28,14 @@
 // included": the NaN-safe reading is the point, not a style slip.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+mod baseline;
 pub mod cloud;
 pub mod confidence;
 pub mod config;
 pub mod cosine_kmeans;
 pub mod cumulative_angle;
 pub mod estimator;
+mod finish;
 #[doc(hidden)]
 pub mod fixtures;
 pub mod literal;

@@ -22,11 +22,16 @@
 //! 6. **Sign.** Uphill (positive) when the inclined plane's normal points
 //!    back towards the robot, downhill (negative) when it points forward.
 //! 7. **Distance.** Along the optical axis to the inclined plane.
+//!
+//! The chosen planes' pixels (`segment.rs`): the inclined plane's, and the
+//! ground's segments joined into one, their quality pooled
+//! (`quality.rs`).
 
 mod config;
 pub mod ground;
 pub mod inclined;
 pub mod quality;
+mod segment;
 
 use nalgebra::Vector3;
 use slope_ipc_types::EstimateStatus;
@@ -40,6 +45,7 @@ pub use config::SelectionConfig;
 pub use ground::Ground;
 pub use inclined::{axis_distance, forward_direction, slope_sign};
 pub use quality::{plane_quality, PlaneQuality};
+pub(crate) use segment::{chosen_segments, PlaneSegment};
 
 /// What selection needs to know about a segmented plane.
 #[derive(Debug, Clone, Copy, PartialEq)]

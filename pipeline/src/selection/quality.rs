@@ -84,6 +84,44 @@ pub fn plane_quality(
 /// It keeps the noise model's cost off the per-pixel path.
 pub const QUALITY_SAMPLES: usize = 1000;
 
+/// The quality of planes taken together (the ground's segments), pooled
+/// over their pixels: each RMS figure the root of the pixel-weighted mean
+/// square, the areas summed, the border share pixel-weighted.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct PooledQuality {
+    squared_m2: f64,
+    squared_relative: f64,
+    squared_noise: f64,
+    area_m2: f64,
+    border_pixels: f64,
+}
+
+impl PooledQuality {
+    /// Adds a plane of `pixels` pixels whose RMS distance from its own
+    /// plane is `rms_m`, of quality `quality`.
+    pub(crate) fn add(&mut self, pixels: usize, rms_m: f64, quality: &PlaneQuality) {
+        let n = pixels as f64;
+        self.squared_m2 += rms_m.powi(2) * n;
+        self.squared_relative += quality.relative_rms.powi(2) * n;
+        self.squared_noise += quality.noise_ratio.powi(2) * n;
+        self.area_m2 += quality.area_m2;
+        self.border_pixels += quality.border_fraction * n;
+    }
+
+    /// The quality of the planes added, `pixels` pixels in all (counted as
+    /// at least 1).
+    pub(crate) fn quality(&self, pixels: usize) -> PlaneQuality {
+        let n = pixels.max(1) as f64;
+        PlaneQuality {
+            rms_m: (self.squared_m2 / n).sqrt(),
+            relative_rms: (self.squared_relative / n).sqrt(),
+            area_m2: self.area_m2,
+            border_fraction: self.border_pixels / n,
+            noise_ratio: (self.squared_noise / n).sqrt(),
+        }
+    }
+}
+
 #[derive(Debug, Default)]
 struct Sums {
     count: usize,
