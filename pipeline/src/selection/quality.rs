@@ -187,20 +187,25 @@ mod tests {
 
     /// A fronto-parallel wall 2 m ahead filling the image: its area is the
     /// image's footprint at 2 m, `(W z / fx) (H z / fy)`.
+    /// The quality of the wall plane `z = 2` over every pixel of `view`.
+    fn wall_quality(view: &CloudView<'_>) -> PlaneQuality {
+        let all: Vec<u32> = (0..view.points.len() as u32).collect();
+        let plane = Plane::from_point_normal(&Vector3::new(0.0, 0.0, 2.0), &-Vector3::z()).unwrap();
+        plane_quality(
+            view,
+            &plane,
+            &all,
+            &Threshold::of(&RansacConfig::default()),
+            NoiseModel::Kinect2,
+        )
+    }
+
     #[test]
     fn area_of_a_wall_is_the_image_footprint() {
         let scene = Scene::wall_facing(2.0);
         let cloud = SceneCloud::render(&scene, 64, 48, 0.0, 0);
         let view = cloud.view();
-        let all: Vec<u32> = (0..view.points.len() as u32).collect();
-        let plane = Plane::from_point_normal(&Vector3::new(0.0, 0.0, 2.0), &-Vector3::z()).unwrap();
-        let q = plane_quality(
-            &view,
-            &plane,
-            &all,
-            &Threshold::of(&RansacConfig::default()),
-            NoiseModel::Kinect2,
-        );
+        let q = wall_quality(&view);
         let f = view.intrinsics.fx;
         let expected = (64.0 * 2.0 / f) * (48.0 * 2.0 / f);
         assert!(
@@ -227,15 +232,7 @@ mod tests {
             width: 0,
             ..cloud.view()
         };
-        let all: Vec<u32> = (0..view.points.len() as u32).collect();
-        let plane = Plane::from_point_normal(&Vector3::new(0.0, 0.0, 2.0), &-Vector3::z()).unwrap();
-        let q = plane_quality(
-            &view,
-            &plane,
-            &all,
-            &Threshold::of(&RansacConfig::default()),
-            NoiseModel::Kinect2,
-        );
+        let q = wall_quality(&view);
         assert!(q.rms_m.is_nan() && q.relative_rms.is_nan() && q.noise_ratio.is_nan());
         assert_eq!((q.area_m2, q.border_fraction), (0.0, 0.0));
     }
