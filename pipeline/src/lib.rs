@@ -10,7 +10,7 @@
 //! | `statistical_outlier.rs` | 1. statistical outlier removal (m = 20, alpha = 2) |
 //! | `ransac_planes/` | 2. RANSAC plane segmentation (sample grid, f32 inlier test, hypotheses, regions, labelling) |
 //! | `pass_through.rs` | 3. pass-through filter (at most 10,000 points a plane) |
-//! | `normals.rs` | 4. PCA normals over K = 100 neighbours |
+//! | `normals/` | 4. PCA normals over K = 100 neighbours (window tables, k-d tree fallback, coarse grid normals) |
 //! | `cosine_kmeans.rs` | 5. cosine k-means, dominant cluster |
 //! | `cumulative_angle.rs` | 6. cumulative averaging of the angle |
 //! | `plane_fit.rs` | TLS and least-squares plane fits (baselines) |

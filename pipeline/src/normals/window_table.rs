@@ -1,0 +1,255 @@
+//! The summed-area tables of a plane's moments and the smallest window
+//! around a point that holds K of its points (module doc of `normals`).
+
+use nalgebra::Vector3;
+
+use super::{
+    moments, Bounds, NormalEstimator, NormalStats, NormalsConfig, CHANNELS, TABLE_CELL_PX,
+};
+use crate::cloud::{is_measured, to_vec3, CloudView};
+
+impl NormalEstimator {
+    /// For each member, the moment sums of its smallest window (from the
+    /// table over `bounds`) that holds K points and spans the patch radius,
+    /// into `sums`, and how far it had to grow, into `radius`; a member
+    /// outside the bounds or without such a window goes to `fallback`.
+    pub(super) fn find_windows(
+        &mut self,
+        cloud: &CloudView<'_>,
+        members: &[u32],
+        bounds: &Bounds,
+        config: &NormalsConfig,
+        stats: &mut NormalStats,
+    ) {
+        let w = cloud.width;
+        let k = config.neighbours.max(3);
+        let focal = cloud.focal_px();
+        let r0 = start_radius(k);
+        let r_max = config.max_window_radius_px.max(r0);
+        let g = TABLE_CELL_PX;
+        let cells = (bounds.width.div_ceil(g), bounds.height.div_ceil(g));
+        for (slot, &pixel) in members.iter().enumerate() {
+            let pixel = pixel as usize;
+            let Some(p) = cloud.points.get(pixel).filter(|p| is_measured(p)) else {
+                stats.undefined += 1;
+                continue;
+            };
+            let (Some(u), Some(v)) = (
+                (pixel % w)
+                    .checked_sub(bounds.u0)
+                    .filter(|&u| u < bounds.width),
+                (pixel / w)
+                    .checked_sub(bounds.v0)
+                    .filter(|&v| v < bounds.height),
+            ) else {
+                self.fallback.push(slot);
+                continue;
+            };
+            self.radius[slot] = u16::MAX;
+            // The patch spans at least `min_patch_radius_m` on the surface.
+            let metric = (config.min_patch_radius_m * focal / f64::from(p.z_m).max(1e-3)).ceil();
+            let r_start = if metric.is_finite() {
+                (metric as usize).clamp(r0, r_max.max(r0))
+            } else {
+                r0
+            };
+            match smallest_window(&self.table, cells, (u, v), r_start..=r_max, k) {
+                Some((m, r)) => {
+                    stats.from_window += 1;
+                    // 0: the first window sufficed (an interior point).
+                    self.radius[slot] = (r - r_start) as u16;
+                    self.sums[slot] = m;
+                }
+                None => self.fallback.push(slot),
+            }
+        }
+    }
+
+    /// Summed-area tables of the ten moments over the bounding box, one
+    /// cell per `TABLE_CELL_PX` x `TABLE_CELL_PX` block of pixels.
+    pub(super) fn build_table(
+        &mut self,
+        cloud: &CloudView<'_>,
+        members: &[u32],
+        b: &Bounds,
+        c: &Vector3<f64>,
+    ) {
+        let g = TABLE_CELL_PX;
+        let (bw, bh) = (b.width.div_ceil(g), b.height.div_ceil(g));
+        let tw = bw + 1;
+        // The members' moments summed per block, a row of blocks at a
+        // time; members in pixel order (as inliers are) need no sort.
+        self.order.clear();
+        self.order.extend_from_slice(members);
+        if !self.order.is_sorted() {
+            self.order.sort_unstable();
+        }
+        self.block_row.clear();
+        self.block_row.resize(bw, [0.0; CHANNELS]);
+        // One pass, row by row: each cell is written once.
+        self.table.clear();
+        self.table.reserve(tw * (bh + 1));
+        self.table
+            .extend(std::iter::repeat_n([0.0; CHANNELS], tw + 1));
+        let mut next = 0;
+        for bv in 0..bh {
+            self.sum_block_row(cloud, b, c, bv, &mut next);
+            let mut run = [0.0; CHANNELS];
+            for bu in 0..bw {
+                let above = &self.table[bv * tw + bu + 1];
+                let mut cell = [0.0; CHANNELS];
+                for ch in 0..CHANNELS {
+                    run[ch] += self.block_row[bu][ch];
+                    cell[ch] = run[ch] + above[ch];
+                }
+                self.table.push(cell);
+            }
+            if bv + 1 < bh {
+                self.table.push([0.0; CHANNELS]);
+            }
+        }
+    }
+
+    /// The moments (relative to `c`) of the sorted members in the pixel
+    /// rows of block row `bv`, summed per block into `block_row`; `next`
+    /// is the first member not yet summed, and moves past these rows.
+    fn sum_block_row(
+        &mut self,
+        cloud: &CloudView<'_>,
+        b: &Bounds,
+        c: &Vector3<f64>,
+        bv: usize,
+        next: &mut usize,
+    ) {
+        let g = TABLE_CELL_PX;
+        let w = cloud.width;
+        self.block_row.fill([0.0; CHANNELS]);
+        // The pixel rows of this row of blocks, walked without a
+        // division per pixel; a block's sum is kept in registers while
+        // consecutive pixels fall into it.
+        for v in b.v0 + bv * g..(b.v0 + (bv + 1) * g).min(b.v0 + b.height) {
+            let row_start = v * w;
+            let mut current: Option<(usize, [f64; CHANNELS])> = None;
+            while let Some(&pixel) = self
+                .order
+                .get(*next)
+                .filter(|&&p| (p as usize) < row_start + w)
+            {
+                *next += 1;
+                let pixel = pixel as usize;
+                let (Some(u), Some(p)) = (
+                    pixel.checked_sub(row_start + b.u0).filter(|&u| u < b.width),
+                    cloud.points.get(pixel).filter(|p| is_measured(p)),
+                ) else {
+                    continue;
+                };
+                let block = u / g;
+                if let Some((at, sums)) = current.filter(|(at, _)| *at != block) {
+                    add_into(&mut self.block_row[at], &sums);
+                    current = None;
+                }
+                let sums = &mut current.get_or_insert((block, [0.0; CHANNELS])).1;
+                for (s, x) in sums.iter_mut().zip(moments(&(to_vec3(p) - c))) {
+                    *s += x;
+                }
+            }
+            if let Some((at, sums)) = current {
+                add_into(&mut self.block_row[at], &sums);
+            }
+        }
+    }
+}
+
+/// `into += from`, channel by channel.
+#[inline]
+fn add_into(into: &mut [f64; CHANNELS], from: &[f64; CHANNELS]) {
+    for (a, b) in into.iter_mut().zip(from) {
+        *a += b;
+    }
+}
+
+/// Smallest radius whose square window holds K pixels.
+fn start_radius(k: usize) -> usize {
+    let mut r = 1;
+    while (2 * r + 1) * (2 * r + 1) < k {
+        r += 1;
+    }
+    r
+}
+
+/// The moment sums of the smallest window around table pixel `(u, v)`,
+/// its radius tried from `radii` in turn, that holds at least `k` points,
+/// and that radius; `None` when none does (or the window covers the whole
+/// table of `cells` = (columns, rows) before). A window holds the table
+/// cells its pixels touch.
+#[inline]
+fn smallest_window(
+    table: &[[f64; CHANNELS]],
+    (bw, bh): (usize, usize),
+    (u, v): (usize, usize),
+    radii: std::ops::RangeInclusive<usize>,
+    k: usize,
+) -> Option<([f64; CHANNELS], usize)> {
+    let g = TABLE_CELL_PX;
+    let tw = bw + 1;
+    for r in radii {
+        // The table cells the window's pixels touch.
+        let (a0, a1) = (u.saturating_sub(r) / g, ((u + r) / g + 1).min(bw));
+        let (b0, b1) = (v.saturating_sub(r) / g, ((v + r) / g + 1).min(bh));
+        let s = |c: usize| {
+            table[b1 * tw + a1][c] - table[b0 * tw + a1][c] - table[b1 * tw + a0][c]
+                + table[b0 * tw + a0][c]
+        };
+        let count = s(0);
+        if count + 0.5 >= k as f64 {
+            let mut m = [0.0; CHANNELS];
+            for (c, mc) in m.iter_mut().enumerate() {
+                *mc = s(c);
+            }
+            return Some((m, r));
+        }
+        if a0 == 0 && b0 == 0 && a1 == bw && b1 == bh {
+            break;
+        }
+    }
+    None
+}
+
+/// Bounding box of the members' pixels and their centroid.
+pub(super) fn bounds_and_centre(
+    cloud: &CloudView<'_>,
+    members: &[u32],
+) -> Option<(Bounds, Vector3<f64>)> {
+    let w = cloud.width;
+    if w == 0 {
+        // No pixel grid (a malformed view): no pixel has a place in it.
+        return None;
+    }
+    let (mut u0, mut v0, mut u1, mut v1) = (usize::MAX, usize::MAX, 0, 0);
+    let mut sum = Vector3::zeros();
+    let mut count = 0usize;
+    for &pixel in members {
+        let pixel = pixel as usize;
+        let Some(p) = cloud.point(pixel) else {
+            continue;
+        };
+        let (u, v) = (pixel % w, pixel / w);
+        u0 = u0.min(u);
+        v0 = v0.min(v);
+        u1 = u1.max(u);
+        v1 = v1.max(v);
+        sum += p;
+        count += 1;
+    }
+    (count > 0).then(|| {
+        (
+            Bounds {
+                u0,
+                v0,
+                width: u1 - u0 + 1,
+                height: v1 - v0 + 1,
+            },
+            sum / count as f64,
+        )
+    })
+}
