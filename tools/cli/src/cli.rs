@@ -104,8 +104,14 @@ pub const MAX_FRAMES_ZERO: &str = "must be at least 1 (leave the flag out for no
 /// `--max-frames` (and its likes): at least 1; no flag, no limit. The same
 /// rule in every program.
 pub fn max_frames_arg(text: &str) -> Result<u64, String> {
+    count_arg(text, MAX_FRAMES_ZERO)
+}
+
+/// A whole number of at least 1; 0 is answered with `zero` (what the flag's
+/// 0 would have meant and what to do instead).
+pub fn count_arg(text: &str, zero: &str) -> Result<u64, String> {
     match text.parse::<u64>() {
-        Ok(0) => Err(MAX_FRAMES_ZERO.to_string()),
+        Ok(0) => Err(zero.to_string()),
         Ok(n) => Ok(n),
         Err(_) => Err(format!("'{text}' is not a whole number")),
     }

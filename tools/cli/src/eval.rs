@@ -43,7 +43,7 @@ use slope_sensor::recording::{DepthImage, FrameEntry, Recording};
 
 use slope_sensor::publish::StopFlag;
 
-use crate::cli::{max_frames_arg, Interruption, LogArgs};
+use crate::cli::{count_arg, max_frames_arg, Interruption, LogArgs};
 use crate::demo::median;
 use crate::estimator::{load_config, method_arg};
 use crate::eval_artifacts::{Artifacts, Snapshot};
@@ -504,11 +504,7 @@ pub const RENDER_EVERY_ZERO: &str =
 
 /// `--render-every N`: at least 1.
 fn render_every_arg(text: &str) -> Result<u64, String> {
-    match text.parse::<u64>() {
-        Ok(0) => Err(RENDER_EVERY_ZERO.to_string()),
-        Ok(n) => Ok(n),
-        Err(_) => Err(format!("'{text}' is not a whole number")),
-    }
+    count_arg(text, RENDER_EVERY_ZERO)
 }
 
 /// What a run produced, and which recordings failed.
