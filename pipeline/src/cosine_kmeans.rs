@@ -17,9 +17,9 @@
 //! **How it runs.** The assignment step (each normal to the centre with the
 //! largest dot product) runs on an `f32` structure-of-arrays copy of the
 //! normals, one centre at a time over all normals, which the compiler
-//! vectorises; so does the update step (each cluster's sum of its members,
-//! `f32` over blocks of 256, added up in `f64`); centres and spreads stay
-//! `f64`. Normals of one plane
+//! vectorises; the update step sums each cluster's members in one pass over
+//! the normals for all clusters (`f32` in 8 lanes over blocks of 256, added
+//! up in `f64`); centres and spreads stay `f64`. Normals of one plane
 //! differ from their centres by degrees, dot products by 1e-2 to 1e-4,
 //! against `f32` rounding of 6e-8: a label can change only for a normal
 //! equidistant from two centres to that precision.
@@ -59,6 +59,35 @@ pub struct CosineKmeans {
     uz: Vec<f32>,
     best_dot: Vec<f32>,
     best: Vec<u32>,
+    /// Per cluster, its sum and size, and its lane sums over one block of
+    /// the update step.
+    sums: Vec<(Vector3<f64>, usize)>,
+    lanes: Vec<LaneSums>,
+}
+
+/// Lanes of the update step's `f32` sums.
+const LANES: usize = 8;
+/// Normals per block of `f32` lane sums in the update step.
+const BLOCK: usize = 256;
+
+/// One cluster's `f32` sums and sizes of one block, lane by lane.
+#[derive(Debug, Default, Clone, Copy)]
+struct LaneSums {
+    x: [f32; LANES],
+    y: [f32; LANES],
+    z: [f32; LANES],
+    count: [u32; LANES],
+}
+
+impl LaneSums {
+    /// Adds a member's coordinates to lane `l`.
+    #[inline]
+    fn add(&mut self, l: usize, x: f32, y: f32, z: f32) {
+        self.x[l] += x;
+        self.y[l] += y;
+        self.z[l] += z;
+        self.count[l] += 1;
+    }
 }
 
 /// Lloyd iterations stop when no centre moves by more than this angle,
@@ -190,8 +219,9 @@ impl CosineKmeans {
                 *label = best;
             }
             let mut moved: f64 = 0.0;
-            for (j, (c, count)) in centres.iter_mut().zip(&mut counts).enumerate() {
-                let (sum, members) = self.cluster_sum(j as u32);
+            self.cluster_sums(centres.len());
+            for ((c, count), &(sum, members)) in centres.iter_mut().zip(&mut counts).zip(&self.sums)
+            {
                 *count = members;
                 if let Some(m) = sum.try_normalize(1e-12) {
                     moved = moved.max(cosine_distance(c, &m));
@@ -293,52 +323,54 @@ impl CosineKmeans {
         }
     }
 
-    /// Sum and size of cluster `j` after the assignment step: branch-free
-    /// `f32` sums in 8 lanes (vectorised) over blocks of 256 normals, added
-    /// up in `f64`.
-    fn cluster_sum(&self, j: u32) -> (Vector3<f64>, usize) {
-        const BLOCK: usize = 256;
-        const LANES: usize = 8;
-        let mut total = Vector3::zeros();
-        let mut count = 0usize;
-        for start in (0..self.best.len()).step_by(BLOCK) {
-            let end = (start + BLOCK).min(self.best.len());
-            let (mut sx, mut sy, mut sz) = ([0f32; LANES], [0f32; LANES], [0f32; LANES]);
-            let mut n = [0u32; LANES];
-            let mut add = |l: usize, b: u32, x: f32, y: f32, z: f32| {
-                let member = u32::from(b == j);
-                let m = member as f32;
-                sx[l] += m * x;
-                sy[l] += m * y;
-                sz[l] += m * z;
-                n[l] += member;
-            };
-            let best = self.best[start..end].chunks_exact(LANES);
-            let xs = self.ux[start..end].chunks_exact(LANES);
-            let ys = self.uy[start..end].chunks_exact(LANES);
-            let zs = self.uz[start..end].chunks_exact(LANES);
-            let tail = start + best.len() * LANES;
-            for (((b, x), y), z) in best.zip(xs).zip(ys).zip(zs) {
+    /// Sum and size of every cluster after the assignment step, into
+    /// `sums`: `f32` sums in 8 lanes (normal `i` in lane `i % 8`) over
+    /// blocks of 256 normals, each block's lanes added up in `f64`; one
+    /// pass over the normals for all clusters.
+    fn cluster_sums(&mut self, k: usize) {
+        self.sums.clear();
+        self.sums.resize(k, (Vector3::zeros(), 0));
+        self.lanes.clear();
+        self.lanes.resize(k, LaneSums::default());
+        let n = self.best.len();
+        for start in (0..n).step_by(BLOCK) {
+            let end = (start + BLOCK).min(n);
+            self.lanes.fill(LaneSums::default());
+            let whole = start + (end - start) / LANES * LANES;
+            let labels = self.best[start..whole].as_chunks::<LANES>().0;
+            let xs = self.ux[start..whole].as_chunks::<LANES>().0;
+            let ys = self.uy[start..whole].as_chunks::<LANES>().0;
+            let zs = self.uz[start..whole].as_chunks::<LANES>().0;
+            for (((b, x), y), z) in labels.iter().zip(xs).zip(ys).zip(zs) {
                 for l in 0..LANES {
-                    add(l, b[l], x[l], y[l], z[l]);
+                    if let Some(s) = self.lanes.get_mut(b[l] as usize) {
+                        s.add(l, x[l], y[l], z[l]);
+                    }
                 }
             }
-            for i in tail..end {
-                add(i - tail, self.best[i], self.ux[i], self.uy[i], self.uz[i]);
+            for i in whole..end {
+                if let Some(s) = self.lanes.get_mut(self.best[i] as usize) {
+                    s.add(i - whole, self.ux[i], self.uy[i], self.uz[i]);
+                }
             }
-            let sum = |s: [f32; LANES]| s.iter().map(|&v| f64::from(v)).sum::<f64>();
-            total += Vector3::new(sum(sx), sum(sy), sum(sz));
-            count += n.iter().sum::<u32>() as usize;
+            for ((total, count), s) in self.sums.iter_mut().zip(&self.lanes) {
+                let sum = |s: &[f32; LANES]| s.iter().map(|&v| f64::from(v)).sum::<f64>();
+                *total += Vector3::new(sum(&s.x), sum(&s.y), sum(&s.z));
+                *count += s.count.iter().sum::<u32>() as usize;
+            }
         }
-        (total, count)
     }
 
+    /// The first unit vector nearest (cosine distance) to `target`.
     fn argmin_distance(&self, target: &Vector3<f64>) -> usize {
-        self.unit
-            .iter()
-            .enumerate()
-            .min_by(|a, b| cosine_distance(a.1, target).total_cmp(&cosine_distance(b.1, target)))
-            .map_or(0, |(j, _)| j)
+        let mut best = (0, f64::INFINITY);
+        for (j, u) in self.unit.iter().enumerate() {
+            let d = cosine_distance(u, target);
+            if d.total_cmp(&best.1).is_lt() || j == 0 {
+                best = (j, d);
+            }
+        }
+        best.0
     }
 }
 
