@@ -129,33 +129,36 @@ impl NormalEstimator {
         // consecutive pixels fall into it.
         for v in b.v0 + bv * g..(b.v0 + (bv + 1) * g).min(b.v0 + b.height) {
             let row_start = v * w;
-            let mut current: Option<(usize, [f64; CHANNELS])> = None;
-            while let Some(&pixel) = self
-                .order
-                .get(*next)
-                .filter(|&&p| (p as usize) < row_start + w)
-            {
-                *next += 1;
-                let pixel = pixel as usize;
-                let (Some(u), Some(p)) = (
-                    pixel.checked_sub(row_start + b.u0).filter(|&u| u < b.width),
-                    cloud.points.get(pixel).filter(|p| is_measured(p)),
-                ) else {
-                    continue;
-                };
-                let block = u / g;
-                if let Some((at, sums)) = current.filter(|(at, _)| *at != block) {
+            let (first, end) = (row_start + b.u0, row_start + w);
+            let order = &self.order;
+            // The row's members from `next` on: (block, moments) of each
+            // measured one inside the bounds.
+            let mut members = std::iter::from_fn(|| {
+                while let Some(&pixel) = order.get(*next).filter(|&&p| (p as usize) < end) {
+                    *next += 1;
+                    let pixel = pixel as usize;
+                    let (Some(u), Some(p)) = (
+                        pixel.checked_sub(first).filter(|&u| u < b.width),
+                        cloud.points.get(pixel).filter(|p| is_measured(p)),
+                    ) else {
+                        continue;
+                    };
+                    return Some((u / g, moments(&(to_vec3(p) - c))));
+                }
+                None
+            });
+            let Some((mut at, mut sums)) = members.next() else {
+                continue;
+            };
+            for (block, m) in members {
+                if block == at {
+                    add_into(&mut sums, &m);
+                } else {
                     add_into(&mut self.block_row[at], &sums);
-                    current = None;
-                }
-                let sums = &mut current.get_or_insert((block, [0.0; CHANNELS])).1;
-                for (s, x) in sums.iter_mut().zip(moments(&(to_vec3(p) - c))) {
-                    *s += x;
+                    (at, sums) = (block, m);
                 }
             }
-            if let Some((at, sums)) = current {
-                add_into(&mut self.block_row[at], &sums);
-            }
+            add_into(&mut self.block_row[at], &sums);
         }
     }
 }
