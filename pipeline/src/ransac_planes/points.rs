@@ -127,16 +127,25 @@ impl Points {
     }
 
     /// Removes the points `removed` (strictly increasing), keeping the
-    /// others in order: the runs between removed points move down whole
-    /// (a `memmove` each), so the cost is in the removed points and the
-    /// bytes moved, not a per-point copy of every array.
+    /// others in order: the runs between removed points move down, a long
+    /// one whole (a `memmove`), a short one point by point, so the cost is
+    /// in the removed points and the bytes moved, not a per-point copy of
+    /// every array from the start.
     pub fn remove_sorted(&mut self, removed: &[u32]) {
+        /// Runs at least this long move by `memmove`.
+        const LONG_RUN: usize = 16;
         fn remove<T: Copy>(v: &mut Vec<T>, removed: &[u32]) {
             let mut to = removed[0] as usize;
             for (k, &r) in removed.iter().enumerate() {
                 let from = r as usize + 1;
                 let end = removed.get(k + 1).map_or(v.len(), |&next| next as usize);
-                v.copy_within(from..end, to);
+                if end - from >= LONG_RUN {
+                    v.copy_within(from..end, to);
+                } else {
+                    for i in 0..end - from {
+                        v[to + i] = v[from + i];
+                    }
+                }
                 to += end - from;
             }
             v.truncate(to);

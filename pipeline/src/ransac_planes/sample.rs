@@ -10,9 +10,10 @@ use super::Threshold;
 use crate::cloud::{is_measured, to_vec3, CloudView};
 use crate::normals::grid_normal;
 
-/// Removals of fewer than one free point in this many move the runs of
-/// points between them whole.
-const RUNS_BELOW: usize = 8;
+/// Removals of fewer than one in this many of the free points from the
+/// first removed on move the runs of points between them (the runs are
+/// long); more are compacted point by point (the runs are short).
+const RUNS_BELOW: usize = 2;
 
 /// A cell without a free sample point.
 pub(super) const NO_SAMPLE: u32 = u32::MAX;
@@ -100,8 +101,8 @@ impl SampleGrid {
     /// Removes the free points `removed` (increasing, as the cells of free
     /// points are in raster order) and renumbers the cells of the points
     /// after the first one removed. Few removed points (a small region):
-    /// the runs between them move down whole; many (short runs): the
-    /// points kept are copied one by one.
+    /// the runs between them move down; many (short runs): the points
+    /// kept are copied one by one.
     fn compact(&mut self) {
         let Some(&first) = self.removed.first() else {
             return;
@@ -110,7 +111,7 @@ impl SampleGrid {
             self.coarse[self.points.tag[j as usize] as usize] = NO_SAMPLE;
         }
         let n = self.points.len();
-        if self.removed.len() * RUNS_BELOW < n {
+        if self.removed.len() * RUNS_BELOW < n - first as usize {
             self.points.remove_sorted(&self.removed);
         } else {
             let (coarse, tag) = (&self.coarse, &self.points.tag);

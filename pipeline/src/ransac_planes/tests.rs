@@ -274,8 +274,9 @@ fn removing_sample_points_keeps_the_others_in_order() {
     grid.load(&cloud.view(), &keep, &config, cos_gate);
     let n = grid.points.len();
     assert!(n > 400, "{n}");
-    // A few points (runs), then every other point (one by one).
-    for step in [97, 2] {
+    // A few points (long runs, moved whole), one in five (short runs,
+    // point by point), then every other point (the kept points copied).
+    for step in [97, 5, 2] {
         let before: Vec<(u32, Vector3<f64>)> = (0..grid.points.len())
             .map(|j| (grid.points.tag[j], grid.points.point(j)))
             .collect();
