@@ -81,8 +81,26 @@ impl Points {
         self.tag.clear();
     }
 
+    /// Room for `n` more points without reallocating.
+    pub fn reserve(&mut self, n: usize) {
+        for v in [
+            &mut self.x,
+            &mut self.y,
+            &mut self.z,
+            &mut self.nx,
+            &mut self.ny,
+            &mut self.nz,
+            &mut self.t,
+            &mut self.gate,
+        ] {
+            v.reserve(n);
+        }
+        self.tag.reserve(n);
+    }
+
     /// Adds a point; `normal` `None` when unknown, `cos_gate` the
     /// configured gate (`None`: off).
+    #[inline]
     pub fn push(
         &mut self,
         p: &Vector3<f64>,

@@ -52,6 +52,7 @@ impl SampleGrid {
         self.stride = s;
         self.coarse_w = w.saturating_sub(s / 2).div_ceil(s);
         self.coarse_h = h.saturating_sub(s / 2).div_ceil(s);
+        self.points.reserve(self.coarse_w * self.coarse_h);
         let radius = 2;
         for (row, v) in (s / 2..h).step_by(s).enumerate() {
             for (column, u) in (s / 2..w).step_by(s).enumerate() {
