@@ -83,10 +83,12 @@ impl PlaneSegmenter {
     /// sits on an edge or in clutter).
     fn fill_pool(&mut self, gated: bool) {
         let sample = &self.sample.points;
-        let n = sample.len();
         self.pool.clear();
-        self.pool
-            .extend((0..n as u32).filter(|&j| !gated || sample.has_normal(j as usize)));
+        if gated {
+            sample.with_normal(&mut self.pool);
+        } else {
+            self.pool.extend(0..sample.len() as u32);
+        }
     }
 }
 

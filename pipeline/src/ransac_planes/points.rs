@@ -217,10 +217,16 @@ impl Points {
         )
     }
 
-    /// True when the point has a coarse normal.
-    #[inline]
-    pub fn has_normal(&self, j: usize) -> bool {
-        self.nx[j] != 0.0 || self.ny[j] != 0.0 || self.nz[j] != 0.0
+    /// Appends to `out` the indices of the points with a coarse normal
+    /// (not zero), in order.
+    pub fn with_normal(&self, out: &mut Vec<u32>) {
+        let normals = self.nx.iter().zip(&self.ny).zip(&self.nz);
+        out.extend(
+            (0..self.len() as u32)
+                .zip(normals)
+                .filter(|(_, ((&x, &y), &z))| x != 0.0 || y != 0.0 || z != 0.0)
+                .map(|(j, _)| j),
+        );
     }
 
     /// The point's coarse normal, `None` when unknown.
