@@ -40,8 +40,7 @@ impl PlaneSegmenter {
             return None;
         }
         let sample = &self.sample.points;
-        fill_score_subset(sample, &mut self.score, &mut self.indices);
-        let score = &self.score;
+        let score = score_subset(sample, &mut self.score, &mut self.indices);
         let mut best: Option<(usize, Plane)> = None;
         let mut needed = config.max_iterations;
         let mut it = 0;
@@ -84,10 +83,12 @@ impl PlaneSegmenter {
     /// sits on an edge or in clutter).
     fn fill_pool(&mut self, gated: bool) {
         let sample = &self.sample.points;
-        let n = sample.len();
         self.pool.clear();
-        self.pool
-            .extend((0..n as u32).filter(|&j| !gated || sample.has_normal(j as usize)));
+        if gated {
+            sample.with_normal(&mut self.pool);
+        } else {
+            self.pool.extend(0..sample.len() as u32);
+        }
     }
 }
 
@@ -135,21 +136,26 @@ fn draw(sample: &Points, pool: &[u32], from_normal: bool, rng: &mut ChaCha8Rng) 
         .then_some(plane)
 }
 
-/// The score subset: all of `sample` when small, else every
-/// (n / SCORE_POINTS)-th point in raster order, so each image region is
-/// scored in proportion, copied in a scrambled order (a stride coprime with
-/// SCORE_POINTS) so that the pretest prefix is spread over the whole image.
-fn fill_score_subset(sample: &Points, score: &mut Points, indices: &mut Vec<u32>) {
+/// The score subset: all of `sample` when small (then `sample` itself, in
+/// its order), else every (n / SCORE_POINTS)-th point in raster order, so
+/// each image region is scored in proportion, copied into `score` in a
+/// scrambled order (a stride coprime with SCORE_POINTS) so that the
+/// pretest prefix is spread over the whole image.
+fn score_subset<'a>(
+    sample: &'a Points,
+    score: &'a mut Points,
+    indices: &mut Vec<u32>,
+) -> &'a Points {
     let n = sample.len();
-    indices.clear();
     if n <= SCORE_POINTS {
-        indices.extend(0..n as u32);
-    } else {
-        indices.extend(
-            (0..SCORE_POINTS).map(|k| ((k * SCRAMBLE) % SCORE_POINTS * n / SCORE_POINTS) as u32),
-        );
+        return sample;
     }
+    indices.clear();
+    indices.extend(
+        (0..SCORE_POINTS).map(|k| ((k * SCRAMBLE) % SCORE_POINTS * n / SCORE_POINTS) as u32),
+    );
     score.gather(sample, indices);
+    score
 }
 
 /// Refits `plane` by TLS on its inliers among `score` and rescores it,

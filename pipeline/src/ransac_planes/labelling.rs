@@ -3,6 +3,7 @@
 //! threshold) among those that took the sample cells around it.
 
 use nalgebra::Vector3;
+use slope_ipc_types::CloudPoint;
 
 use super::sample::cell_neighbourhood;
 use super::{PlaneSegmenter, SegmentedPlane, Threshold, NO_PLANE};
@@ -132,12 +133,17 @@ impl PlaneSegmenter {
         // Each row is walked a sample cell's columns at a time: pixels
         // of one run share their candidate planes (none: skipped whole).
         let run_start = |c: usize| if c == 0 { 0 } else { c * s + half };
-        let (planes, sums) = (&mut self.planes, &mut self.sums);
+        let mut runs = Runs {
+            planes: &mut self.planes,
+            sums: &mut self.sums,
+            found,
+            t,
+        };
         for v in 0..h {
             let row = (v.saturating_sub(half) / s).min(ch - 1) * cw;
             for column in 0..cw {
-                let (candidates, n) = self.cell_candidates[row + column];
-                if n == 0 {
+                let (candidates, n) = &self.cell_candidates[row + column];
+                if *n == 0 {
                     continue;
                 }
                 let end = if column + 1 == cw {
@@ -147,25 +153,63 @@ impl PlaneSegmenter {
                 };
                 let first = v * w + run_start(column);
                 let run = first..v * w + end.min(w);
-                let pixels = keep[run.clone()].iter().zip(&cloud.points[run]);
-                for (i, (&kept, point)) in (first..).zip(pixels) {
-                    if !kept || !is_measured(point) {
-                        continue;
-                    }
-                    let p = to_vec3(point);
-                    let limit = t.at(&p);
-                    let mut best: Option<(f64, u16)> = None;
-                    for &k in &candidates[..n as usize] {
-                        let d = found[k as usize].signed_distance(&p).abs();
-                        if d <= limit && best.is_none_or(|(bd, _)| d < bd) {
-                            best = Some((d, k));
-                        }
-                    }
-                    if let Some((_, k)) = best {
-                        planes[k as usize].inliers.push(i as u32);
-                        sums[k as usize].add(p.x, p.y, p.z);
-                    }
+                let (keep, points) = (&keep[run.clone()], &cloud.points[run]);
+                match &candidates[..*n as usize] {
+                    &[k] => runs.one(k as usize, first, keep, points),
+                    several => runs.nearest(several, first, keep, points),
                 }
+            }
+        }
+    }
+}
+
+/// The labelling of one run of pixels (a row's pixels within one sample
+/// cell's columns) given the run's candidate planes.
+struct Runs<'a> {
+    planes: &'a mut [SegmentedPlane],
+    sums: &'a mut [MomentSums],
+    found: &'a [Plane],
+    t: Threshold,
+}
+
+impl Runs<'_> {
+    /// One candidate (most runs): its sums and inliers held across the
+    /// run, the same additions in the same order as [`Self::nearest`].
+    #[inline]
+    fn one(&mut self, k: usize, first: usize, keep: &[bool], points: &[CloudPoint]) {
+        let (plane, inliers) = (&self.found[k], &mut self.planes[k].inliers);
+        let mut sums = self.sums[k];
+        for (i, (&kept, point)) in (first..).zip(keep.iter().zip(points)) {
+            if !kept || !is_measured(point) {
+                continue;
+            }
+            let p = to_vec3(point);
+            if plane.signed_distance(&p).abs() <= self.t.at(&p) {
+                inliers.push(i as u32);
+                sums.add(p.x, p.y, p.z);
+            }
+        }
+        self.sums[k] = sums;
+    }
+
+    /// Each pixel to the nearest of `candidates` within the threshold.
+    fn nearest(&mut self, candidates: &[u16], first: usize, keep: &[bool], points: &[CloudPoint]) {
+        for (i, (&kept, point)) in (first..).zip(keep.iter().zip(points)) {
+            if !kept || !is_measured(point) {
+                continue;
+            }
+            let p = to_vec3(point);
+            let limit = self.t.at(&p);
+            let mut best: Option<(f64, u16)> = None;
+            for &k in candidates {
+                let d = self.found[k as usize].signed_distance(&p).abs();
+                if d <= limit && best.is_none_or(|(bd, _)| d < bd) {
+                    best = Some((d, k));
+                }
+            }
+            if let Some((_, k)) = best {
+                self.planes[k as usize].inliers.push(i as u32);
+                self.sums[k as usize].add(p.x, p.y, p.z);
             }
         }
     }

@@ -116,10 +116,9 @@ pub struct PlaneSegmenter {
     cell_candidates: Vec<([u16; 9], u8)>,
     in_work: Vec<bool>,
     stack: Vec<u32>,
-    /// Region search: the inliers' cells, the region being flooded, and
-    /// the largest region so far (after the search: its cells, sorted).
+    /// Region search: the inliers' cells, and (after the search) the
+    /// largest region's cells, sorted.
     seeds: Vec<u32>,
-    flooded: Vec<u32>,
     region: Vec<u32>,
     planes: Vec<SegmentedPlane>,
     sums: Vec<MomentSums>,

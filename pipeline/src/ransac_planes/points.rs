@@ -81,8 +81,26 @@ impl Points {
         self.tag.clear();
     }
 
+    /// Room for `n` more points without reallocating.
+    pub fn reserve(&mut self, n: usize) {
+        for v in [
+            &mut self.x,
+            &mut self.y,
+            &mut self.z,
+            &mut self.nx,
+            &mut self.ny,
+            &mut self.nz,
+            &mut self.t,
+            &mut self.gate,
+        ] {
+            v.reserve(n);
+        }
+        self.tag.reserve(n);
+    }
+
     /// Adds a point; `normal` `None` when unknown, `cos_gate` the
     /// configured gate (`None`: off).
+    #[inline]
     pub fn push(
         &mut self,
         p: &Vector3<f64>,
@@ -126,26 +144,69 @@ impl Points {
         self.tag.extend_from_slice(indices);
     }
 
-    /// Keeps the points `indices` (increasing), in order.
-    pub fn retain(&mut self, indices: &[u32]) {
-        fn keep<T: Copy>(v: &mut Vec<T>, indices: &[u32]) {
-            // indices[k] >= k: a forward copy in place never overwrites a
-            // point still to be read.
-            for (k, &j) in indices.iter().enumerate() {
-                v[k] = v[j as usize];
+    /// Removes the points `removed` (strictly increasing), keeping the
+    /// others in order: the runs between removed points move down, a long
+    /// one whole (a `memmove`), a short one point by point, so the cost is
+    /// in the removed points and the bytes moved, not a per-point copy of
+    /// every array from the start.
+    pub fn remove_sorted(&mut self, removed: &[u32]) {
+        /// Runs at least this long move by `memmove`.
+        const LONG_RUN: usize = 16;
+        fn remove<T: Copy>(v: &mut Vec<T>, removed: &[u32]) {
+            let mut to = removed[0] as usize;
+            for (k, &r) in removed.iter().enumerate() {
+                let from = r as usize + 1;
+                let end = removed.get(k + 1).map_or(v.len(), |&next| next as usize);
+                if end - from >= LONG_RUN {
+                    v.copy_within(from..end, to);
+                } else {
+                    for i in 0..end - from {
+                        v[to + i] = v[from + i];
+                    }
+                }
+                to += end - from;
             }
-            v.truncate(indices.len());
+            v.truncate(to);
         }
-        debug_assert!(indices.is_sorted());
-        keep(&mut self.x, indices);
-        keep(&mut self.y, indices);
-        keep(&mut self.z, indices);
-        keep(&mut self.nx, indices);
-        keep(&mut self.ny, indices);
-        keep(&mut self.nz, indices);
-        keep(&mut self.t, indices);
-        keep(&mut self.gate, indices);
-        keep(&mut self.tag, indices);
+        if removed.is_empty() {
+            return;
+        }
+        debug_assert!(removed.windows(2).all(|w| w[0] < w[1]));
+        remove(&mut self.x, removed);
+        remove(&mut self.y, removed);
+        remove(&mut self.z, removed);
+        remove(&mut self.nx, removed);
+        remove(&mut self.ny, removed);
+        remove(&mut self.nz, removed);
+        remove(&mut self.t, removed);
+        remove(&mut self.gate, removed);
+        remove(&mut self.tag, removed);
+    }
+
+    /// Keeps the points before `first` and, after them, the points `kept`
+    /// (increasing, each at least `first`), in order: a copy per kept
+    /// point, cheaper than [`Self::remove_sorted`]'s runs when they are
+    /// short.
+    pub fn retain_tail(&mut self, first: usize, kept: &[u32]) {
+        fn keep<T: Copy>(v: &mut Vec<T>, first: usize, kept: &[u32]) {
+            // kept[k] >= first + k: a forward copy in place never
+            // overwrites a point still to be read.
+            let tail = &mut v[first..];
+            for (k, &j) in kept.iter().enumerate() {
+                tail[k] = tail[j as usize - first];
+            }
+            v.truncate(first + kept.len());
+        }
+        debug_assert!(kept.is_sorted() && kept.first().is_none_or(|&j| j as usize >= first));
+        keep(&mut self.x, first, kept);
+        keep(&mut self.y, first, kept);
+        keep(&mut self.z, first, kept);
+        keep(&mut self.nx, first, kept);
+        keep(&mut self.ny, first, kept);
+        keep(&mut self.nz, first, kept);
+        keep(&mut self.t, first, kept);
+        keep(&mut self.gate, first, kept);
+        keep(&mut self.tag, first, kept);
     }
 
     pub fn point(&self, j: usize) -> Vector3<f64> {
@@ -156,10 +217,16 @@ impl Points {
         )
     }
 
-    /// True when the point has a coarse normal.
-    #[inline]
-    pub fn has_normal(&self, j: usize) -> bool {
-        self.nx[j] != 0.0 || self.ny[j] != 0.0 || self.nz[j] != 0.0
+    /// Appends to `out` the indices of the points with a coarse normal
+    /// (not zero), in order.
+    pub fn with_normal(&self, out: &mut Vec<u32>) {
+        let normals = self.nx.iter().zip(&self.ny).zip(&self.nz);
+        out.extend(
+            (0..self.len() as u32)
+                .zip(normals)
+                .filter(|(_, ((&x, &y), &z))| x != 0.0 || y != 0.0 || z != 0.0)
+                .map(|(j, _)| j),
+        );
     }
 
     /// The point's coarse normal, `None` when unknown.
@@ -221,15 +288,30 @@ impl Points {
         }
     }
 
-    /// Moments of the inliers of `plane` among all points.
+    /// Moments of the inliers of `plane` among all points, summed in point
+    /// order. The inlier tests run a block of points at a time into flags
+    /// (a loop the compiler vectorises), then the block's inliers are
+    /// summed.
     pub fn inlier_moments(&self, plane: &Plane) -> Moments {
+        const BLOCK: usize = 256;
         let p = PlaneF32::from(plane);
         let mut m = MomentSums::about(-plane.d * plane.normal);
-        for i in 0..self.len() {
-            let (x, y, z) = (self.x[i], self.y[i], self.z[i]);
-            let (nx, ny, nz) = (self.nx[i], self.ny[i], self.nz[i]);
-            if inlier(&p, x, y, z, nx, ny, nz, self.t[i], self.gate[i]) {
-                m.add(f64::from(x), f64::from(y), f64::from(z));
+        let mut flags = [false; BLOCK];
+        for start in (0..self.len()).step_by(BLOCK) {
+            let r = start..(start + BLOCK).min(self.len());
+            let (x, y, z) = (&self.x[r.clone()], &self.y[r.clone()], &self.z[r.clone()]);
+            let (nx, ny, nz) = (
+                &self.nx[r.clone()],
+                &self.ny[r.clone()],
+                &self.nz[r.clone()],
+            );
+            let (t, g) = (&self.t[r.clone()], &self.gate[r.clone()]);
+            let flags = &mut flags[..x.len()];
+            for (i, flag) in flags.iter_mut().enumerate() {
+                *flag = inlier(&p, x[i], y[i], z[i], nx[i], ny[i], nz[i], t[i], g[i]);
+            }
+            for (i, _) in flags.iter().enumerate().filter(|(_, &f)| f) {
+                m.add(f64::from(x[i]), f64::from(y[i]), f64::from(z[i]));
             }
         }
         m.moments()

@@ -1,16 +1,20 @@
 //! A plane is one connected surface: the largest 8-connected region of its
 //! sample inliers on the sample grid. The search costs in proportion to the
-//! inliers, not to the grid: seeds are the inliers' cells, and each region's
-//! cells are collected as it is flooded.
+//! inliers, not to the grid: seeds are the inliers' cells, each region's
+//! cells get the region's label as it is flooded, and the largest region's
+//! cells are collected from the seeds (in raster order, so sorted).
 
 use super::points::Gate;
 use super::PlaneSegmenter;
-use crate::plane_fit::{fit_tls, Moments, Plane};
+use crate::plane_fit::{fit_tls, MomentSums, Plane};
 
 /// `coarse_label` of a cell that is not (or no longer) an unvisited inlier.
 const DONE: u32 = 0;
 /// `coarse_label` of an inlier cell not yet flooded.
 const INLIER: u32 = 1;
+/// `coarse_label` of the cells of the first region flooded (the next one
+/// `FIRST_REGION + 1`, and so on).
+const FIRST_REGION: u32 = 2;
 
 impl PlaneSegmenter {
     /// Fills `region` with the coarse cells of the largest 8-connected
@@ -21,8 +25,12 @@ impl PlaneSegmenter {
         let grid = &self.sample;
         let (cw, ch) = (grid.coarse_w, grid.coarse_h);
         grid.points.inlier_flags(plane, gate, &mut self.flags);
-        self.coarse_label.clear();
-        self.coarse_label.resize(cw * ch, DONE);
+        // Every label is DONE after a search, so the grid is reset only
+        // when its size changes.
+        if self.coarse_label.len() != cw * ch {
+            self.coarse_label.clear();
+            self.coarse_label.resize(cw * ch, DONE);
+        }
         // Free points are in raster order, so their cells are too.
         self.seeds.clear();
         for (j, &flag) in self.flags.iter().enumerate() {
@@ -32,18 +40,49 @@ impl PlaneSegmenter {
                 self.seeds.push(c as u32);
             }
         }
+        let largest = self.flood_components();
+        let grid = &self.sample;
+        // The seeds are in raster order: the region's cells come out
+        // sorted; every label is DONE again.
         self.region.clear();
-        self.flooded.clear();
+        for &c in &self.seeds {
+            let label = &mut self.coarse_label[c as usize];
+            if *label == largest {
+                self.region.push(c);
+            }
+            *label = DONE;
+        }
+        // About the first point: the same sums as `Moments::add` (which
+        // takes its first point as origin), without its per-point checks
+        // (sample points are finite).
+        let point = |c: u32| grid.points.point(grid.coarse[c as usize] as usize);
+        let first = point(*self.region.first()?);
+        let mut sums = MomentSums::about(first);
+        for &c in &self.region {
+            let p = point(c);
+            sums.add(p.x, p.y, p.z);
+        }
+        fit_tls(&sums.moments())
+    }
+
+    /// Floods the 8-connected regions of the seeds' cells (`INLIER`),
+    /// labelling each region's cells with its own label; returns the label
+    /// of the largest (the first flooded among equally large ones).
+    fn flood_components(&mut self) -> u32 {
+        let (cw, ch) = (self.sample.coarse_w, self.sample.coarse_h);
+        let mut largest = (0usize, DONE);
+        let mut label = FIRST_REGION - 1;
         for &seed in &self.seeds {
             if self.coarse_label[seed as usize] != INLIER {
                 continue;
             }
-            self.flooded.clear();
-            self.coarse_label[seed as usize] = DONE;
+            label += 1;
+            self.coarse_label[seed as usize] = label;
             self.stack.clear();
             self.stack.push(seed);
+            let mut size = 0;
             while let Some(c) = self.stack.pop() {
-                self.flooded.push(c);
+                size += 1;
                 // The 3x3 cells around `c` (`cell_neighbourhood`, unrolled
                 // by rows: the region's cells, not their order, matter).
                 let (cu, cv) = (c as usize % cw, c as usize / cw);
@@ -51,21 +90,16 @@ impl PlaneSegmenter {
                 for r in cv.saturating_sub(1)..(cv + 2).min(ch) {
                     for q in r * cw + u0..r * cw + u1 {
                         if self.coarse_label[q] == INLIER {
-                            self.coarse_label[q] = DONE;
+                            self.coarse_label[q] = label;
                             self.stack.push(q as u32);
                         }
                     }
                 }
             }
-            if self.flooded.len() > self.region.len() {
-                std::mem::swap(&mut self.region, &mut self.flooded);
+            if size > largest.0 {
+                largest = (size, label);
             }
         }
-        self.region.sort_unstable();
-        let mut moments = Moments::new();
-        for &c in &self.region {
-            moments.add(&grid.points.point(grid.coarse[c as usize] as usize));
-        }
-        fit_tls(&moments)
+        largest.1
     }
 }

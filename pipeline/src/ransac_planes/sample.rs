@@ -10,6 +10,11 @@ use super::Threshold;
 use crate::cloud::{is_measured, to_vec3, CloudView};
 use crate::normals::grid_normal;
 
+/// Removals of fewer than one in this many of the free points from the
+/// first removed on move the runs of points between them (the runs are
+/// long); more are compacted point by point (the runs are short).
+const RUNS_BELOW: usize = 2;
+
 /// A cell without a free sample point.
 pub(super) const NO_SAMPLE: u32 = u32::MAX;
 
@@ -26,7 +31,8 @@ pub(super) struct SampleGrid {
     pub coarse_w: usize,
     pub coarse_h: usize,
     pub stride: usize,
-    /// Scratch for [`Self::remove`]: the free points kept.
+    /// Scratch for [`Self::compact`]: the free points removed, and kept.
+    removed: Vec<u32>,
     keep: Vec<u32>,
 }
 
@@ -46,6 +52,7 @@ impl SampleGrid {
         self.stride = s;
         self.coarse_w = w.saturating_sub(s / 2).div_ceil(s);
         self.coarse_h = h.saturating_sub(s / 2).div_ceil(s);
+        self.points.reserve(self.coarse_w * self.coarse_h);
         let radius = 2;
         for (row, v) in (s / 2..h).step_by(s).enumerate() {
             for (column, u) in (s / 2..w).step_by(s).enumerate() {
@@ -77,36 +84,47 @@ impl SampleGrid {
 
     /// Removes the free points whose flag is set and renumbers the cells.
     pub fn remove(&mut self, remove: &[bool]) {
-        for (&c, &gone) in self.points.tag.iter().zip(remove) {
-            if gone {
-                self.coarse[c as usize] = NO_SAMPLE;
-            }
-        }
+        self.removed.clear();
+        self.removed
+            .extend((0..remove.len() as u32).filter(|&j| remove[j as usize]));
         self.compact();
     }
 
-    /// Removes the free points of the given cells.
+    /// Removes the free points of the given cells (increasing, each with a
+    /// free point).
     pub fn remove_cells(&mut self, cells: &[u32]) {
-        for &c in cells {
-            self.coarse[c as usize] = NO_SAMPLE;
-        }
+        self.removed.clear();
+        self.removed
+            .extend(cells.iter().map(|&c| self.coarse[c as usize]));
         self.compact();
     }
 
-    /// Keeps the free points whose cell still points at them (in order) and
-    /// renumbers their cells: a pass over the free points, not the grid.
+    /// Removes the free points `removed` (increasing, as the cells of free
+    /// points are in raster order) and renumbers the cells of the points
+    /// after the first one removed. Few removed points (a small region):
+    /// the runs between them move down; many (short runs): the points
+    /// kept are copied one by one.
     fn compact(&mut self) {
-        let (coarse, tag) = (&self.coarse, &self.points.tag);
-        self.keep.clear();
-        self.keep.extend(
-            (0..tag.len() as u32).filter(|&j| coarse[tag[j as usize] as usize] != NO_SAMPLE),
-        );
-        if self.keep.len() == tag.len() {
+        let Some(&first) = self.removed.first() else {
             return;
+        };
+        for &j in &self.removed {
+            self.coarse[self.points.tag[j as usize] as usize] = NO_SAMPLE;
         }
-        self.points.retain(&self.keep);
-        for (j, &c) in self.points.tag.iter().enumerate() {
-            self.coarse[c as usize] = j as u32;
+        let n = self.points.len();
+        if self.removed.len() * RUNS_BELOW < n - first as usize {
+            self.points.remove_sorted(&self.removed);
+        } else {
+            let (coarse, tag) = (&self.coarse, &self.points.tag);
+            self.keep.clear();
+            self.keep.extend(
+                (first..n as u32).filter(|&j| coarse[tag[j as usize] as usize] != NO_SAMPLE),
+            );
+            self.points.retain_tail(first as usize, &self.keep);
+        }
+        let tag = &self.points.tag;
+        for (j, &c) in (first..).zip(&tag[first as usize..]) {
+            self.coarse[c as usize] = j;
         }
     }
 

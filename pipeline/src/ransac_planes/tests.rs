@@ -260,3 +260,42 @@ fn empty_input_gives_no_plane() {
         .segment(&cloud.view(), &[], &RansacConfig::default(), &mut rng)
         .is_empty());
 }
+
+/// Removing sample points, by runs (few removed) or point by point (many),
+/// keeps exactly the other points in order and renumbers their cells.
+#[test]
+fn removing_sample_points_keeps_the_others_in_order() {
+    use super::sample::{SampleGrid, NO_SAMPLE};
+    let cloud = SceneCloud::render(&Scene::ramp(16.0), 128, 106, 0.0, 2);
+    let keep: Vec<bool> = cloud.points.iter().map(|p| p.is_valid()).collect();
+    let config = RansacConfig::default();
+    let cos_gate = Some(config.normal_threshold_deg.to_radians().cos());
+    let mut grid = SampleGrid::default();
+    grid.load(&cloud.view(), &keep, &config, cos_gate);
+    let n = grid.points.len();
+    assert!(n > 400, "{n}");
+    // A few points (long runs, moved whole), one in five (short runs,
+    // point by point), then every other point (the kept points copied).
+    for step in [97, 5, 2] {
+        let before: Vec<(u32, Vector3<f64>)> = (0..grid.points.len())
+            .map(|j| (grid.points.tag[j], grid.points.point(j)))
+            .collect();
+        let gone: Vec<bool> = (0..before.len()).map(|j| j % step == 1).collect();
+        grid.remove(&gone);
+        let expected: Vec<_> = before
+            .iter()
+            .zip(&gone)
+            .filter(|(_, &g)| !g)
+            .map(|(p, _)| *p)
+            .collect();
+        let after: Vec<_> = (0..grid.points.len())
+            .map(|j| (grid.points.tag[j], grid.points.point(j)))
+            .collect();
+        assert_eq!(after, expected);
+        for (j, &(cell, _)) in after.iter().enumerate() {
+            assert_eq!(grid.coarse[cell as usize], j as u32);
+        }
+        let free = grid.coarse.iter().filter(|&&c| c != NO_SAMPLE).count();
+        assert_eq!(free, after.len());
+    }
+}
