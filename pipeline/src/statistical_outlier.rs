@@ -193,7 +193,7 @@ impl StatisticalOutlierFilter {
             let centre = row * pw + pad;
             // The sum is NaN where the centre or a neighbour has no reading;
             // blocks with a measured centre among those take the fallback.
-            const BLOCK: usize = 16;
+            const BLOCK: usize = 32;
             let stats = &mut self.mean_distance[v * w..(v + 1) * w];
             let measured = &self.zs[centre..centre + w];
             let blocks = stats
