@@ -24,9 +24,12 @@
 //! **How m = 20 runs.** The cloud is copied into NaN-padded coordinate
 //! planes (structure of arrays; a point without a reading is NaN in all
 //! three). Each pair's distance is computed once for both pixels, a row at
-//! a time, for the ten half-disc offsets; the pair rows of the last three
-//! image rows are kept, so a row's 20 distances are gathered from them
-//! (no scattering into other rows) and summed in a fixed order. NaN
+//! a time, for the ten half-disc offsets (those reaching the same image
+//! row in one pass, so the centre row is loaded once); the pair rows of the
+//! last three image rows are kept, so a row's 20 distances are gathered
+//! from them (no scattering into other rows) and summed in a fixed order
+//! (a test checks the sum bit for bit). The mean and spread come from one
+//! counting and summing pass over the statistics. NaN
 //! coordinates propagate, so a NaN sum marks a pixel with a missing grid
 //! neighbour: those take the fallback. The fallback computes the 80 squared
 //! distances of the 9x9 window (a missing one as infinity) and selects the
@@ -172,11 +175,16 @@ impl StatisticalOutlierFilter {
         for row in pad - 2..pad + h {
             let slot = row % 3;
             let first = row * pw + pad - 2;
-            for (k, &(du, dv)) in HALF_DISC.iter().enumerate() {
-                let other = (first as isize + dv * pw as isize + du) as usize;
-                let out = &mut self.pairs[(k * 3 + slot) * ew..(k * 3 + slot + 1) * ew];
-                pair_distances([&self.xs, &self.ys, &self.zs], first, other, out);
-            }
+            let planes = [&self.xs[..], &self.ys[..], &self.zs[..]];
+            let out = &mut self.pairs[slot * HALF_DISC.len() * ew..][..HALF_DISC.len() * ew];
+            // The offsets one image row apart at a time (HALF_DISC is in
+            // that order): the centre row is loaded once per group, and the
+            // other row once per plane.
+            let (same_row, out) = out.split_at_mut(2 * ew);
+            let (next_row, two_rows) = out.split_at_mut(5 * ew);
+            pair_distances::<2>(planes, first, first + 1, same_row);
+            pair_distances::<5>(planes, first, first + pw - 2, next_row);
+            pair_distances::<3>(planes, first, first + 2 * pw - 1, two_rows);
             if row < pad {
                 continue;
             }
@@ -185,7 +193,7 @@ impl StatisticalOutlierFilter {
             let centre = row * pw + pad;
             // The sum is NaN where the centre or a neighbour has no reading;
             // blocks with a measured centre among those take the fallback.
-            const BLOCK: usize = 16;
+            const BLOCK: usize = 32;
             let stats = &mut self.mean_distance[v * w..(v + 1) * w];
             let measured = &self.zs[centre..centre + w];
             let blocks = stats
@@ -219,7 +227,7 @@ impl StatisticalOutlierFilter {
         // Pixel u sits at column e = u + 2 of a pair row; the pair (k) seen
         // from its other end is at column e - du_k of row row - dv_k.
         let term = |k: usize, dv: usize, shift: isize| -> &[f32] {
-            let base = (k * 3 + (row - dv) % 3) * ew;
+            let base = ((row - dv) % 3 * HALF_DISC.len() + k) * ew;
             let start = (2 - shift) as usize;
             &self.pairs[base + start..base + start + w]
         };
@@ -320,9 +328,12 @@ impl StatisticalOutlierFilter {
     fn threshold(&mut self, config: &OutlierConfig, keep: &mut [bool]) -> OutlierStats {
         // Statistics over the points with a finite statistic (isolated
         // points are outliers whatever the threshold).
-        let md = &self.mean_distance;
-        let measured = md.iter().filter(|d| !d.is_nan()).count();
-        let count = md.iter().filter(|d| d.is_finite()).count();
+        let FiniteSums {
+            measured,
+            count,
+            sum,
+            sum_sq,
+        } = finite_sums(&self.mean_distance);
         if count == 0 {
             keep.fill(false);
             return OutlierStats {
@@ -330,7 +341,6 @@ impl StatisticalOutlierFilter {
                 ..OutlierStats::default()
             };
         }
-        let (sum, sum_sq) = finite_sums(md);
         let mean = sum / count as f64;
         let std = (sum_sq / count as f64 - mean * mean).max(0.0).sqrt();
         let threshold = mean + config.std_ratio * std;
@@ -375,7 +385,8 @@ impl StatisticalOutlierFilter {
             let ys = &mut self.ys[dst..dst + w];
             let zs = &mut self.zs[dst..dst + w];
             for (((p, x), y), z) in src.iter().zip(xs).zip(ys).zip(zs) {
-                let valid = p.x_m.is_finite() & p.y_m.is_finite() & p.z_m.is_finite();
+                let finite = zero_if_finite(p.x_m) + zero_if_finite(p.y_m) + zero_if_finite(p.z_m);
+                let valid = finite == 0.0;
                 *x = if valid { p.x_m } else { f32::NAN };
                 *y = if valid { p.y_m } else { f32::NAN };
                 *z = if valid { p.z_m } else { f32::NAN };
@@ -422,40 +433,85 @@ impl StatisticalOutlierFilter {
     }
 }
 
-/// Distances from the `out.len()` points at `first..` to those at `other..`
-/// of the coordinate planes; NaN where either point has no reading.
-fn pair_distances(planes: [&[f32]; 3], first: usize, other: usize, out: &mut [f32]) {
-    let n = out.len();
+/// Zero for a finite `x`, NaN for infinity or NaN: one subtraction, where
+/// `is_finite` takes three vector instructions.
+#[inline(always)]
+#[allow(clippy::eq_op)]
+fn zero_if_finite(x: f32) -> f32 {
+    x - x
+}
+
+/// Distances from the `n` points at `first..` of the coordinate planes to
+/// the points at `other + k..`, for k in `0..K`, into the `K` rows of `n`
+/// values of `out` (`out.len() == K * n`); NaN where either point has no
+/// reading. The `K` offsets share one other row, so the centre row is
+/// loaded once for all of them.
+#[inline(always)]
+fn pair_distances<const K: usize>(
+    planes: [&[f32]; 3],
+    first: usize,
+    other: usize,
+    out: &mut [f32],
+) {
+    let n = out.len() / K;
     let [xs, ys, zs] = planes;
     let (cx, cy, cz) = (
         &xs[first..first + n],
         &ys[first..first + n],
         &zs[first..first + n],
     );
+    let wide = n + K - 1;
     let (ox, oy, oz) = (
-        &xs[other..other + n],
-        &ys[other..other + n],
-        &zs[other..other + n],
+        &xs[other..other + wide],
+        &ys[other..other + wide],
+        &zs[other..other + wide],
     );
+    let mut rows = out.chunks_exact_mut(n);
+    // `out` holds exactly K rows of n.
+    let mut outs: [&mut [f32]; K] = std::array::from_fn(|_| rows.next().unwrap_or_default());
+    for row in &mut outs {
+        *row = &mut std::mem::take(row)[..n];
+    }
     for u in 0..n {
-        let dx = cx[u] - ox[u];
-        let dy = cy[u] - oy[u];
-        let dz = cz[u] - oz[u];
-        out[u] = (dx * dx + dy * dy + dz * dz).sqrt();
+        let (x, y, z) = (cx[u], cy[u], cz[u]);
+        for (k, row) in outs.iter_mut().enumerate() {
+            let dx = x - ox[u + k];
+            let dy = y - oy[u + k];
+            let dz = z - oz[u + k];
+            row[u] = (dx * dx + dy * dy + dz * dz).sqrt();
+        }
     }
 }
 
-/// Sum and sum of squares of the finite values of `values` in f64, four
-/// interleaved running sums so that the additions vectorise. Blocks are
-/// first copied with the other values zeroed (a loop of its own, so that it
-/// vectorises too).
-fn finite_sums(values: &[f32]) -> (f64, f64) {
+/// What [`finite_sums`] counts and sums.
+struct FiniteSums {
+    /// Values that are not NaN.
+    measured: usize,
+    /// Finite values.
+    count: usize,
+    /// Sum and sum of squares of the finite values, in f64.
+    sum: f64,
+    sum_sq: f64,
+}
+
+/// Counts the measured and the finite values of `values` and sums the
+/// finite ones in f64, four interleaved running sums so that the additions
+/// vectorise. Blocks are first copied with the other values zeroed and
+/// counted (a loop of its own, so that it vectorises too).
+fn finite_sums(values: &[f32]) -> FiniteSums {
     let (mut sum, mut sum_sq) = ([0.0f64; 4], [0.0f64; 4]);
+    let (mut measured, mut count) = (0, 0);
     let mut block = [0.0f32; 64];
     for chunk in values.chunks(block.len()) {
+        // At most 64 per block: u32 lanes do not overflow.
+        let (mut block_measured, mut block_count) = (0u32, 0u32);
         for (b, &d) in block.iter_mut().zip(chunk) {
             *b = if d.is_finite() { d } else { 0.0 };
+            block_measured += u32::from(!d.is_nan());
+            block_count += u32::from(d.is_finite());
         }
+        measured += block_measured as usize;
+        count += block_count as usize;
         block[chunk.len()..].fill(0.0);
         for quad in block.chunks_exact(4) {
             for l in 0..4 {
@@ -465,10 +521,12 @@ fn finite_sums(values: &[f32]) -> (f64, f64) {
             }
         }
     }
-    (
-        (sum[0] + sum[1]) + (sum[2] + sum[3]),
-        (sum_sq[0] + sum_sq[1]) + (sum_sq[2] + sum_sq[3]),
-    )
+    FiniteSums {
+        measured,
+        count,
+        sum: (sum[0] + sum[1]) + (sum[2] + sum[3]),
+        sum_sq: (sum_sq[0] + sum_sq[1]) + (sum_sq[2] + sum_sq[3]),
+    }
 }
 
 /// Floats after the last padded row, so that a window row can be read four
@@ -945,6 +1003,70 @@ mod tests {
             }
             assert!(ties <= 2, "m {m}: {ties} verdicts differ");
         }
+    }
+
+    #[test]
+    fn a_complete_disc_sums_its_distances_in_f32_in_a_fixed_order() {
+        // The fast path's statistic, bit for bit: the 20 f32 distances
+        // summed one after the other in the order of `disc_row_sums` (rows
+        // two and one above, then the pixel's own row and the rows below),
+        // divided by 20.
+        const ORDER: [(isize, isize); 20] = [
+            (1, -2),
+            (0, -2),
+            (-1, -2),
+            (2, -1),
+            (1, -1),
+            (0, -1),
+            (-1, -1),
+            (-2, -1),
+            (1, 0),
+            (-1, 0),
+            (2, 0),
+            (-2, 0),
+            (-2, 1),
+            (-1, 1),
+            (0, 1),
+            (1, 1),
+            (2, 1),
+            (-1, 2),
+            (0, 2),
+            (1, 2),
+        ];
+        let mut cloud = SceneCloud::render(&Scene::ramp_between_walls(16.0), 160, 120, 0.0015, 33);
+        cloud.inject_flying_pixels(40, 34);
+        let (w, h) = (160isize, 120isize);
+        let mut filter = StatisticalOutlierFilter::new();
+        let mut keep = Vec::new();
+        filter.filter(&cloud.view(), &OutlierConfig::default(), &mut keep);
+        let point = |u: isize, v: isize| {
+            let inside = (0..w).contains(&u) && (0..h).contains(&v);
+            inside
+                .then(|| cloud.points[(v * w + u) as usize])
+                .filter(|p| p.is_valid())
+        };
+        let mut complete = 0;
+        for v in 0..h {
+            for u in 0..w {
+                let Some(c) = point(u, v) else { continue };
+                let mut sum = 0.0f32;
+                for &(du, dv) in &ORDER {
+                    let Some(q) = point(u + du, v + dv) else {
+                        sum = f32::NAN;
+                        break;
+                    };
+                    let (dx, dy, dz) = (c.x_m - q.x_m, c.y_m - q.y_m, c.z_m - q.z_m);
+                    sum += (dx * dx + dy * dy + dz * dz).sqrt();
+                }
+                if sum.is_nan() {
+                    continue;
+                }
+                complete += 1;
+                let ours = filter.mean_distances()[(v * w + u) as usize];
+                assert_eq!(ours.to_bits(), (sum / 20.0).to_bits(), "pixel ({u},{v})");
+            }
+        }
+        assert!(complete > 15_000, "{complete} pixels with a complete disc");
     }
 
     #[test]
