@@ -85,7 +85,7 @@ impl PlaneSegmenter {
         let sample = &self.sample.points;
         self.pool.clear();
         if gated {
-            sample.with_normal(&mut self.pool);
+            sample.indices_with_normal(&mut self.pool);
         } else {
             self.pool.extend(0..sample.len() as u32);
         }

@@ -133,7 +133,7 @@ impl PlaneSegmenter {
         // Each row is walked a sample cell's columns at a time: pixels
         // of one run share their candidate planes (none: skipped whole).
         let run_start = |c: usize| if c == 0 { 0 } else { c * s + half };
-        let mut runs = Runs {
+        let mut labeller = RunLabeller {
             planes: &mut self.planes,
             sums: &mut self.sums,
             found,
@@ -155,8 +155,8 @@ impl PlaneSegmenter {
                 let run = first..v * w + end.min(w);
                 let (keep, points) = (&keep[run.clone()], &cloud.points[run]);
                 match &candidates[..*n as usize] {
-                    &[k] => runs.one(k as usize, first, keep, points),
-                    several => runs.nearest(several, first, keep, points),
+                    &[k] => labeller.one(k as usize, first, keep, points),
+                    several => labeller.nearest(several, first, keep, points),
                 }
             }
         }
@@ -165,14 +165,14 @@ impl PlaneSegmenter {
 
 /// The labelling of one run of pixels (a row's pixels within one sample
 /// cell's columns) given the run's candidate planes.
-struct Runs<'a> {
+struct RunLabeller<'a> {
     planes: &'a mut [SegmentedPlane],
     sums: &'a mut [MomentSums],
     found: &'a [Plane],
     t: Threshold,
 }
 
-impl Runs<'_> {
+impl RunLabeller<'_> {
     /// One candidate (most runs): its sums and inliers held across the
     /// run, the same additions in the same order as [`Self::nearest`].
     #[inline]

@@ -100,11 +100,14 @@ pub struct SegmentedPlane {
 pub struct PlaneSegmenter {
     /// The sample grid and its free points.
     sample: SampleGrid,
-    /// The score subset of the current extraction, contiguous.
+    /// The score subset of the current extraction, contiguous; filled only
+    /// when there are more than `SCORE_POINTS` (2000) free points, else
+    /// hypotheses are scored on the free points themselves.
     score: Points,
     /// Free points a hypothesis may be drawn from.
     pool: Vec<u32>,
-    /// The score subset's indices into the free points.
+    /// The score subset's indices into the free points; filled, like
+    /// `score`, only when there are more than `SCORE_POINTS` free points.
     indices: Vec<u32>,
     /// Per free point: inlier of the plane at hand.
     flags: Vec<bool>,

@@ -147,8 +147,7 @@ impl Points {
     /// Removes the points `removed` (strictly increasing), keeping the
     /// others in order: the runs between removed points move down, a long
     /// one whole (a `memmove`), a short one point by point, so the cost is
-    /// in the removed points and the bytes moved, not a per-point copy of
-    /// every array from the start.
+    /// in the removed points and the bytes moved.
     pub fn remove_sorted(&mut self, removed: &[u32]) {
         /// Runs at least this long move by `memmove`.
         const LONG_RUN: usize = 16;
@@ -219,7 +218,7 @@ impl Points {
 
     /// Appends to `out` the indices of the points with a coarse normal
     /// (not zero), in order.
-    pub fn with_normal(&self, out: &mut Vec<u32>) {
+    pub fn indices_with_normal(&self, out: &mut Vec<u32>) {
         let normals = self.nx.iter().zip(&self.ny).zip(&self.nz);
         out.extend(
             (0..self.len() as u32)

@@ -10,9 +10,10 @@ use super::Threshold;
 use crate::cloud::{is_measured, to_vec3, CloudView};
 use crate::normals::grid_normal;
 
-/// Removals of fewer than one in this many of the free points from the
-/// first removed on move the runs of points between them (the runs are
-/// long); more are compacted point by point (the runs are short).
+/// Removing fewer than 1/`RUNS_BELOW` of the free points from the first
+/// removed one on uses [`Points::remove_sorted`] (the runs between removed
+/// points are long and move whole), otherwise [`Points::retain_tail`] (the
+/// runs are short and the kept points are copied one by one).
 const RUNS_BELOW: usize = 2;
 
 /// A cell without a free sample point.
@@ -84,6 +85,7 @@ impl SampleGrid {
 
     /// Removes the free points whose flag is set and renumbers the cells.
     pub fn remove(&mut self, remove: &[bool]) {
+        debug_assert_eq!(remove.len(), self.points.len());
         self.removed.clear();
         self.removed
             .extend((0..remove.len() as u32).filter(|&j| remove[j as usize]));
@@ -93,6 +95,7 @@ impl SampleGrid {
     /// Removes the free points of the given cells (increasing, each with a
     /// free point).
     pub fn remove_cells(&mut self, cells: &[u32]) {
+        debug_assert!(cells.iter().all(|&c| self.coarse[c as usize] != NO_SAMPLE));
         self.removed.clear();
         self.removed
             .extend(cells.iter().map(|&c| self.coarse[c as usize]));
@@ -105,6 +108,13 @@ impl SampleGrid {
     /// the runs between them move down; many (short runs): the points
     /// kept are copied one by one.
     fn compact(&mut self) {
+        debug_assert!(
+            self.removed.windows(2).all(|w| w[0] < w[1])
+                && self
+                    .removed
+                    .last()
+                    .is_none_or(|&j| (j as usize) < self.points.len())
+        );
         let Some(&first) = self.removed.first() else {
             return;
         };

@@ -261,11 +261,52 @@ fn empty_input_gives_no_plane() {
         .is_empty());
 }
 
+/// The free points of `grid` with their cells, in order.
+fn free_points(grid: &super::sample::SampleGrid) -> Vec<(u32, Vector3<f64>)> {
+    (0..grid.points.len())
+        .map(|j| (grid.points.tag[j], grid.points.point(j)))
+        .collect()
+}
+
+/// Removes the free points flagged in `gone` (by their cells with
+/// `by_cells`) and checks that exactly the others remain, in order, with
+/// their cells renumbered.
+fn remove_and_check(grid: &mut super::sample::SampleGrid, gone: &[bool], by_cells: bool) {
+    use super::sample::NO_SAMPLE;
+    let before = free_points(grid);
+    if by_cells {
+        let cells: Vec<u32> = before
+            .iter()
+            .zip(gone)
+            .filter(|(_, &g)| g)
+            .map(|(&(cell, _), _)| cell)
+            .collect();
+        assert!(cells.windows(2).all(|w| w[0] < w[1]));
+        grid.remove_cells(&cells);
+    } else {
+        grid.remove(gone);
+    }
+    let expected: Vec<_> = before
+        .iter()
+        .zip(gone)
+        .filter(|(_, &g)| !g)
+        .map(|(p, _)| *p)
+        .collect();
+    let after = free_points(grid);
+    assert_eq!(after, expected);
+    for (j, &(cell, _)) in after.iter().enumerate() {
+        assert_eq!(grid.coarse[cell as usize], j as u32);
+    }
+    let free = grid.coarse.iter().filter(|&&c| c != NO_SAMPLE).count();
+    assert_eq!(free, after.len());
+}
+
 /// Removing sample points, by runs (few removed) or point by point (many),
-/// keeps exactly the other points in order and renumbers their cells.
+/// by flags or by cells, keeps exactly the other points in order and
+/// renumbers their cells.
 #[test]
 fn removing_sample_points_keeps_the_others_in_order() {
-    use super::sample::{SampleGrid, NO_SAMPLE};
+    use super::sample::SampleGrid;
     let cloud = SceneCloud::render(&Scene::ramp(16.0), 128, 106, 0.0, 2);
     let keep: Vec<bool> = cloud.points.iter().map(|p| p.is_valid()).collect();
     let config = RansacConfig::default();
@@ -274,28 +315,27 @@ fn removing_sample_points_keeps_the_others_in_order() {
     grid.load(&cloud.view(), &keep, &config, cos_gate);
     let n = grid.points.len();
     assert!(n > 400, "{n}");
-    // A few points (long runs, moved whole), one in five (short runs,
-    // point by point), then every other point (the kept points copied).
-    for step in [97, 5, 2] {
-        let before: Vec<(u32, Vector3<f64>)> = (0..grid.points.len())
-            .map(|j| (grid.points.tag[j], grid.points.point(j)))
-            .collect();
-        let gone: Vec<bool> = (0..before.len()).map(|j| j % step == 1).collect();
-        grid.remove(&gone);
-        let expected: Vec<_> = before
-            .iter()
-            .zip(&gone)
-            .filter(|(_, &g)| !g)
-            .map(|(p, _)| *p)
-            .collect();
-        let after: Vec<_> = (0..grid.points.len())
-            .map(|j| (grid.points.tag[j], grid.points.point(j)))
-            .collect();
-        assert_eq!(after, expected);
-        for (j, &(cell, _)) in after.iter().enumerate() {
-            assert_eq!(grid.coarse[cell as usize], j as u32);
-        }
-        let free = grid.coarse.iter().filter(|&&c| c != NO_SAMPLE).count();
-        assert_eq!(free, after.len());
+    // Flags point j of `len` when j % step == at.
+    let every = |len: usize, step: usize, at: usize| -> Vec<bool> {
+        (0..len).map(|j| j % step == at).collect()
+    };
+    // Nothing; a few points (long runs, moved whole); one in five from
+    // point 0 on (short runs, point by point); one in seven by their cells;
+    // every other point (the kept points copied).
+    for (step, at, by_cells) in [
+        (1, 1, false),
+        (97, 1, false),
+        (5, 0, false),
+        (7, 3, true),
+        (2, 1, false),
+    ] {
+        let gone = every(grid.points.len(), step, at);
+        remove_and_check(&mut grid, &gone, by_cells);
     }
+    // The last point only, then every point.
+    let m = grid.points.len();
+    assert!(m > 100, "{m}");
+    remove_and_check(&mut grid, &every(m, m, m - 1), false);
+    remove_and_check(&mut grid, &every(m - 1, 1, 0), false);
+    assert_eq!(grid.points.len(), 0);
 }
