@@ -98,6 +98,20 @@ const HALF_DISC: [(isize, isize); 10] = [
     (1, 2),
 ];
 
+/// True when `HALF_DISC[start..start + len]` are `(du, dv)`, `(du + 1, dv)`,
+/// ...: offsets that reach one image row, from column `du` on.
+const fn disc_row_run(start: usize, len: usize, du: isize, dv: isize) -> bool {
+    let mut k = 0;
+    while k < len {
+        let (a, b) = HALF_DISC[start + k];
+        if a != du + k as isize || b != dv {
+            return false;
+        }
+        k += 1;
+    }
+    true
+}
+
 /// The widest fallback window: radius `window_radius(MAX_NEIGHBOURS) + 2`.
 const MAX_FALLBACK_SIDE: usize = 11;
 
@@ -179,7 +193,17 @@ impl StatisticalOutlierFilter {
             let out = &mut self.pairs[slot * HALF_DISC.len() * ew..][..HALF_DISC.len() * ew];
             // The offsets one image row apart at a time (HALF_DISC is in
             // that order): the centre row is loaded once per group, and the
-            // other row once per plane.
+            // other row once per plane. The group sizes (2, 5, 3) and the
+            // other rows' bases (`dv * pw + du` of a group's first offset:
+            // 1, pw - 2, 2 * pw - 1) are HALF_DISC's, checked here:
+            const {
+                assert!(
+                    disc_row_run(0, 2, 1, 0)
+                        && disc_row_run(2, 5, -2, 1)
+                        && disc_row_run(7, 3, -1, 2)
+                        && HALF_DISC.len() == 2 + 5 + 3
+                )
+            };
             let (same_row, out) = out.split_at_mut(2 * ew);
             let (next_row, two_rows) = out.split_at_mut(5 * ew);
             pair_distances::<2>(planes, first, first + 1, same_row);
@@ -219,9 +243,10 @@ impl StatisticalOutlierFilter {
     }
 
     /// Sums the 20 pair distances of every pixel of padded row `row` into
-    /// `row_sum`, in the order the pairs were once accumulated in (so the
-    /// sums are bit-identical to that): the pairs from two rows up, from one
-    /// row up, then the row's own.
+    /// `row_sum`, in a fixed order that sets the f32 rounding of the
+    /// statistic (pinned bit for bit by the test
+    /// `a_complete_disc_sums_its_distances_in_f32_in_a_fixed_order`): the
+    /// pairs from two rows up, from one row up, then the row's own.
     fn disc_row_sums(&mut self, row: usize, ew: usize) {
         let w = ew - 4;
         // Pixel u sits at column e = u + 2 of a pair row; the pair (k) seen
@@ -454,6 +479,7 @@ fn pair_distances<const K: usize>(
     out: &mut [f32],
 ) {
     let n = out.len() / K;
+    debug_assert_eq!(out.len(), K * n);
     let [xs, ys, zs] = planes;
     let (cx, cy, cz) = (
         &xs[first..first + n],
@@ -467,7 +493,9 @@ fn pair_distances<const K: usize>(
         &zs[other..other + wide],
     );
     let mut rows = out.chunks_exact_mut(n);
-    // `out` holds exactly K rows of n.
+    // `out` holds exactly K rows of n, so the default (empty) row is never
+    // taken. Each row is re-sliced to `[..n]`: its length is then known to
+    // be n and the compiler drops the bounds checks of `row[u]` below.
     let mut outs: [&mut [f32]; K] = std::array::from_fn(|_| rows.next().unwrap_or_default());
     for row in &mut outs {
         *row = &mut std::mem::take(row)[..n];
@@ -1005,37 +1033,39 @@ mod tests {
         }
     }
 
-    #[test]
-    fn a_complete_disc_sums_its_distances_in_f32_in_a_fixed_order() {
-        // The fast path's statistic, bit for bit: the 20 f32 distances
-        // summed one after the other in the order of `disc_row_sums` (rows
-        // two and one above, then the pixel's own row and the rows below),
-        // divided by 20.
-        const ORDER: [(isize, isize); 20] = [
-            (1, -2),
-            (0, -2),
-            (-1, -2),
-            (2, -1),
-            (1, -1),
-            (0, -1),
-            (-1, -1),
-            (-2, -1),
-            (1, 0),
-            (-1, 0),
-            (2, 0),
-            (-2, 0),
-            (-2, 1),
-            (-1, 1),
-            (0, 1),
-            (1, 1),
-            (2, 1),
-            (-1, 2),
-            (0, 2),
-            (1, 2),
-        ];
-        let mut cloud = SceneCloud::render(&Scene::ramp_between_walls(16.0), 160, 120, 0.0015, 33);
-        cloud.inject_flying_pixels(40, 34);
-        let (w, h) = (160isize, 120isize);
+    /// The offsets of a pixel's 20 grid neighbours in the order
+    /// `disc_row_sums` adds their distances: rows two and one above, then
+    /// the pixel's own row and the rows below.
+    const ORDER: [(isize, isize); 20] = [
+        (1, -2),
+        (0, -2),
+        (-1, -2),
+        (2, -1),
+        (1, -1),
+        (0, -1),
+        (-1, -1),
+        (-2, -1),
+        (1, 0),
+        (-1, 0),
+        (2, 0),
+        (-2, 0),
+        (-2, 1),
+        (-1, 1),
+        (0, 1),
+        (1, 1),
+        (2, 1),
+        (-1, 2),
+        (0, 2),
+        (1, 2),
+    ];
+
+    /// Checks the fast path's statistic of every pixel of `cloud` with a
+    /// complete disc (it and its 20 grid neighbours measured) bit for bit:
+    /// the 20 f32 distances summed one after the other in `ORDER`, divided
+    /// by 20. Returns the number of such pixels.
+    fn check_complete_discs(cloud: &SceneCloud) -> usize {
+        use crate::cloud::is_measured;
+        let (w, h) = (cloud.width as isize, cloud.height as isize);
         let mut filter = StatisticalOutlierFilter::new();
         let mut keep = Vec::new();
         filter.filter(&cloud.view(), &OutlierConfig::default(), &mut keep);
@@ -1043,30 +1073,39 @@ mod tests {
             let inside = (0..w).contains(&u) && (0..h).contains(&v);
             inside
                 .then(|| cloud.points[(v * w + u) as usize])
-                .filter(|p| p.is_valid())
+                .filter(is_measured)
         };
         let mut complete = 0;
         for v in 0..h {
             for u in 0..w {
                 let Some(c) = point(u, v) else { continue };
+                let disc: Option<Vec<_>> = ORDER
+                    .iter()
+                    .map(|&(du, dv)| point(u + du, v + dv))
+                    .collect();
+                let Some(disc) = disc else { continue };
                 let mut sum = 0.0f32;
-                for &(du, dv) in &ORDER {
-                    let Some(q) = point(u + du, v + dv) else {
-                        sum = f32::NAN;
-                        break;
-                    };
+                for q in disc {
                     let (dx, dy, dz) = (c.x_m - q.x_m, c.y_m - q.y_m, c.z_m - q.z_m);
                     sum += (dx * dx + dy * dy + dz * dz).sqrt();
-                }
-                if sum.is_nan() {
-                    continue;
                 }
                 complete += 1;
                 let ours = filter.mean_distances()[(v * w + u) as usize];
                 assert_eq!(ours.to_bits(), (sum / 20.0).to_bits(), "pixel ({u},{v})");
             }
         }
+        complete
+    }
+
+    #[test]
+    fn a_complete_disc_sums_its_distances_in_f32_in_a_fixed_order() {
+        let mut cloud = SceneCloud::render(&Scene::ramp_between_walls(16.0), 160, 120, 0.0015, 33);
+        cloud.inject_flying_pixels(40, 34);
+        let complete = check_complete_discs(&cloud);
         assert!(complete > 15_000, "{complete} pixels with a complete disc");
+        // Complete discs next to holes, blocks and lines of missing pixels.
+        let holed = check_complete_discs(&holed_fixture(160, 120, 21));
+        assert!(holed > 500, "{holed} pixels with a complete disc, holed");
     }
 
     #[test]
