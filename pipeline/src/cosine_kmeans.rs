@@ -65,7 +65,8 @@ pub struct CosineKmeans {
     lanes: Vec<LaneSums>,
 }
 
-/// Lanes of the update step's `f32` sums.
+/// Lanes of the update step's `f32` sums. With `BLOCK`, it sets their
+/// rounding, so changing either changes the results.
 const LANES: usize = 8;
 /// Normals per block of `f32` lane sums in the update step.
 const BLOCK: usize = 256;
@@ -326,8 +327,13 @@ impl CosineKmeans {
     /// Sum and size of every cluster after the assignment step, into
     /// `sums`: `f32` sums in 8 lanes (normal `i` in lane `i % 8`) over
     /// blocks of 256 normals, each block's lanes added up in `f64`; one
-    /// pass over the normals for all clusters.
+    /// pass over the normals for all clusters. The lanes and blocks are
+    /// kept as they are because they fix the `f32` rounding of the sums,
+    /// hence the centres and the results: a simpler loop (one running sum,
+    /// other lanes or blocks) changes them.
     fn cluster_sums(&mut self, k: usize) {
+        // Labels are centre indices; `get_mut` below would skip others.
+        debug_assert!(self.best.iter().all(|&b| (b as usize) < k));
         self.sums.clear();
         self.sums.resize(k, (Vector3::zeros(), 0));
         self.lanes.clear();
@@ -363,10 +369,16 @@ impl CosineKmeans {
 
     /// The first unit vector nearest (cosine distance) to `target`.
     fn argmin_distance(&self, target: &Vector3<f64>) -> usize {
-        let mut best = (0, f64::INFINITY);
-        for (j, u) in self.unit.iter().enumerate() {
-            let d = cosine_distance(u, target);
-            if d.total_cmp(&best.1).is_lt() || j == 0 {
+        let mut distances = self
+            .unit
+            .iter()
+            .map(|u| cosine_distance(u, target))
+            .enumerate();
+        let Some(mut best) = distances.next() else {
+            return 0;
+        };
+        for (j, d) in distances {
+            if d.total_cmp(&best.1).is_lt() {
                 best = (j, d);
             }
         }
