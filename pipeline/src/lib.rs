@@ -7,7 +7,7 @@
 //!
 //! | file | stage |
 //! |---|---|
-//! | `statistical_outlier.rs` | 1. statistical outlier removal (m = 20, alpha = 2) |
+//! | `statistical_outlier/` | 1. statistical outlier removal (m = 20, alpha = 2; grid path, exact fallback, general m, threshold) |
 //! | `ransac_planes/` | 2. RANSAC plane segmentation (sample grid, f32 inlier test, hypotheses, regions, labelling) |
 //! | `pass_through.rs` | 3. pass-through filter (at most 10,000 points a plane) |
 //! | `normals/` | 4. PCA normals over K = 100 neighbours (window tables, k-d tree fallback, coarse grid normals) |

@@ -18,7 +18,7 @@ use crate::statistical_outlier::{OutlierConfig, OutlierStats};
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum OutlierNeighbourhood {
-    /// The grid-nearest pixels (`statistical_outlier.rs`, ours).
+    /// The grid-nearest pixels (`statistical_outlier/`, ours).
     #[default]
     Grid,
     /// The m nearest points of the whole cloud from a k-d tree (the paper).

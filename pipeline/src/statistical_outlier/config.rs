@@ -1,0 +1,44 @@
+//! The filter's parameters.
+
+use super::MAX_NEIGHBOURS;
+use crate::validate::{at_least, check, non_negative, InvalidValue};
+use serde::{Deserialize, Serialize};
+
+/// Statistical outlier removal (`statistical_outlier/`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct OutlierConfig {
+    pub enabled: bool,
+    /// m: neighbours whose mean distance is the point's statistic (paper: 20).
+    pub neighbours: usize,
+    /// alpha: drop points beyond mean + alpha * std (paper: 2).
+    pub std_ratio: f64,
+    /// Neighbours from the pixel grid (ours) or a k-d tree over the whole
+    /// cloud (the paper, `literal/knn_outlier.rs`).
+    pub neighbourhood: crate::literal::OutlierNeighbourhood,
+}
+
+impl Default for OutlierConfig {
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            neighbours: 20,
+            std_ratio: 2.0,
+            neighbourhood: crate::literal::OutlierNeighbourhood::Grid,
+        }
+    }
+}
+
+impl OutlierConfig {
+    /// Checks every value's range; the error names the first bad key.
+    pub fn validate(&self) -> Result<(), InvalidValue> {
+        at_least("neighbours", self.neighbours, 1)?;
+        check(
+            self.neighbours <= MAX_NEIGHBOURS,
+            "neighbours",
+            self.neighbours,
+            "must be at most 48 (the 7x7 pixel window)",
+        )?;
+        non_negative("std_ratio", self.std_ratio)
+    }
+}

@@ -1,0 +1,211 @@
+//! The m = 20 fast path: each pixel's 20 grid-nearest neighbours (the 5x5
+//! window without its corners), every pair's distance computed once for
+//! both pixels, a row at a time.
+
+use super::fallback::fallback_disc;
+use super::StatisticalOutlierFilter;
+
+/// Half of the 20 offsets with du^2 + dv^2 <= 5 (the 5x5 window without its
+/// corners); the other half is the same pairs seen from the other pixel.
+const HALF_DISC: [(isize, isize); 10] = [
+    (1, 0),
+    (2, 0),
+    (-2, 1),
+    (-1, 1),
+    (0, 1),
+    (1, 1),
+    (2, 1),
+    (-1, 2),
+    (0, 2),
+    (1, 2),
+];
+
+/// True when `HALF_DISC[start..start + len]` are `(du, dv)`, `(du + 1, dv)`,
+/// ...: offsets that reach one image row, from column `du` on.
+const fn disc_row_run(start: usize, len: usize, du: isize, dv: isize) -> bool {
+    let mut k = 0;
+    while k < len {
+        let (a, b) = HALF_DISC[start + k];
+        if a != du + k as isize || b != dv {
+            return false;
+        }
+        k += 1;
+    }
+    true
+}
+
+impl StatisticalOutlierFilter {
+    /// The m = 20 fast path: each pixel's 20 grid-nearest neighbours, every
+    /// pair's distance computed once. Rows are processed top to bottom; the
+    /// distances from row `R` to rows `R`, `R+1` and `R+2` are kept for three
+    /// rows, so row `R`'s sums gather its 20 distances from the rows `R-2..=R`
+    /// without scattering into other rows. A NaN in the sum means a missing
+    /// neighbour (NaN coordinates propagate), and such pixels take the
+    /// fallback.
+    pub(super) fn grid_disc_statistic(&mut self, w: usize, h: usize, pad: usize) {
+        const M: usize = 20;
+        // The pair rows span the columns -2..w+2 of the rows -2..h; `pad`
+        // (4 for m = 20) keeps every access inside the padded planes.
+        debug_assert!(pad >= 4);
+        let pw = w + 2 * pad;
+        let ew = w + 4;
+        self.pairs.clear();
+        self.pairs.resize(HALF_DISC.len() * 3 * ew, f32::NAN);
+        self.row_sum.clear();
+        self.row_sum.resize(w, 0.0);
+        for row in pad - 2..pad + h {
+            let slot = row % 3;
+            let first = row * pw + pad - 2;
+            let planes = [&self.xs[..], &self.ys[..], &self.zs[..]];
+            let out = &mut self.pairs[slot * HALF_DISC.len() * ew..][..HALF_DISC.len() * ew];
+            // The offsets one image row apart at a time (HALF_DISC is in
+            // that order): the centre row is loaded once per group, and the
+            // other row once per plane. The group sizes (2, 5, 3) and the
+            // other rows' bases (`dv * pw + du` of a group's first offset:
+            // 1, pw - 2, 2 * pw - 1) are HALF_DISC's, checked here:
+            const {
+                assert!(
+                    disc_row_run(0, 2, 1, 0)
+                        && disc_row_run(2, 5, -2, 1)
+                        && disc_row_run(7, 3, -1, 2)
+                        && HALF_DISC.len() == 2 + 5 + 3
+                )
+            };
+            let (same_row, out) = out.split_at_mut(2 * ew);
+            let (next_row, two_rows) = out.split_at_mut(5 * ew);
+            pair_distances::<2>(planes, first, first + 1, same_row);
+            pair_distances::<5>(planes, first, first + pw - 2, next_row);
+            pair_distances::<3>(planes, first, first + 2 * pw - 1, two_rows);
+            if row < pad {
+                continue;
+            }
+            self.disc_row_sums(row, ew);
+            let v = row - pad;
+            let centre = row * pw + pad;
+            // The sum is NaN where the centre or a neighbour has no reading;
+            // blocks with a measured centre among those take the fallback.
+            const BLOCK: usize = 32;
+            let stats = &mut self.mean_distance[v * w..(v + 1) * w];
+            let measured = &self.zs[centre..centre + w];
+            let blocks = stats
+                .chunks_mut(BLOCK)
+                .zip(self.row_sum[..w].chunks(BLOCK).zip(measured.chunks(BLOCK)));
+            for (b, (stats, (sums, zs))) in blocks.enumerate() {
+                let mut missing = false;
+                for ((stat, &s), &z) in stats.iter_mut().zip(sums).zip(zs) {
+                    *stat = s / M as f32;
+                    missing |= s.is_nan() & z.is_finite();
+                }
+                if !missing {
+                    continue;
+                }
+                for (u, (stat, z)) in stats.iter_mut().zip(zs).enumerate() {
+                    if stat.is_nan() && z.is_finite() {
+                        let c = centre + b * BLOCK + u;
+                        *stat = fallback_disc([&self.xs, &self.ys, &self.zs], c, pw);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Sums the 20 pair distances of every pixel of padded row `row` into
+    /// `row_sum`, in a fixed order that sets the f32 rounding of the
+    /// statistic (pinned bit for bit by the test
+    /// `a_complete_disc_sums_its_distances_in_f32_in_a_fixed_order`): the
+    /// pairs from two rows up, from one row up, then the row's own.
+    fn disc_row_sums(&mut self, row: usize, ew: usize) {
+        let w = ew - 4;
+        // Pixel u sits at column e = u + 2 of a pair row; the pair (k) seen
+        // from its other end is at column e - du_k of row row - dv_k.
+        let term = |k: usize, dv: usize, shift: isize| -> &[f32] {
+            let base = ((row - dv) % 3 * HALF_DISC.len() + k) * ew;
+            let start = (2 - shift) as usize;
+            &self.pairs[base + start..base + start + w]
+        };
+        let terms: [&[f32]; 20] = [
+            term(7, 2, -1),
+            term(8, 2, 0),
+            term(9, 2, 1),
+            term(2, 1, -2),
+            term(3, 1, -1),
+            term(4, 1, 0),
+            term(5, 1, 1),
+            term(6, 1, 2),
+            term(0, 0, 0),
+            term(0, 0, 1),
+            term(1, 0, 0),
+            term(1, 0, 2),
+            term(2, 0, 0),
+            term(3, 0, 0),
+            term(4, 0, 0),
+            term(5, 0, 0),
+            term(6, 0, 0),
+            term(7, 0, 0),
+            term(8, 0, 0),
+            term(9, 0, 0),
+        ];
+        // Two passes of ten terms: twenty streams at once do not fit the
+        // registers.
+        let out = &mut self.row_sum[..w];
+        for (u, o) in out.iter_mut().enumerate() {
+            let mut s = terms[0][u];
+            for t in &terms[1..10] {
+                s += t[u];
+            }
+            *o = s;
+        }
+        for (u, o) in out.iter_mut().enumerate() {
+            let mut s = *o;
+            for t in &terms[10..] {
+                s += t[u];
+            }
+            *o = s;
+        }
+    }
+}
+
+/// Distances from the `n` points at `first..` of the coordinate planes to
+/// the points at `other + k..`, for k in `0..K`, into the `K` rows of `n`
+/// values of `out` (`out.len() == K * n`); NaN where either point has no
+/// reading. The `K` offsets share one other row, so the centre row is
+/// loaded once for all of them.
+#[inline(always)]
+fn pair_distances<const K: usize>(
+    planes: [&[f32]; 3],
+    first: usize,
+    other: usize,
+    out: &mut [f32],
+) {
+    let n = out.len() / K;
+    debug_assert_eq!(out.len(), K * n);
+    let [xs, ys, zs] = planes;
+    let (cx, cy, cz) = (
+        &xs[first..first + n],
+        &ys[first..first + n],
+        &zs[first..first + n],
+    );
+    let wide = n + K - 1;
+    let (ox, oy, oz) = (
+        &xs[other..other + wide],
+        &ys[other..other + wide],
+        &zs[other..other + wide],
+    );
+    let mut rows = out.chunks_exact_mut(n);
+    // `out` holds exactly K rows of n, so the default (empty) row is never
+    // taken. Each row is re-sliced to `[..n]`: its length is then known to
+    // be n and the compiler drops the bounds checks of `row[u]` below.
+    let mut outs: [&mut [f32]; K] = std::array::from_fn(|_| rows.next().unwrap_or_default());
+    for row in &mut outs {
+        *row = &mut std::mem::take(row)[..n];
+    }
+    for u in 0..n {
+        let (x, y, z) = (cx[u], cy[u], cz[u]);
+        for (k, row) in outs.iter_mut().enumerate() {
+            let dx = x - ox[u + k];
+            let dy = y - oy[u + k];
+            let dz = z - oz[u + k];
+            row[u] = (dx * dx + dy * dy + dz * dz).sqrt();
+        }
+    }
+}
