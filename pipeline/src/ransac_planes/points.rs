@@ -65,8 +65,9 @@ impl Points {
         self.x.len()
     }
 
-    pub fn clear(&mut self) {
-        for v in [
+    /// The `f32` arrays, one per field (all but the tags).
+    fn float_columns(&mut self) -> [&mut Vec<f32>; 8] {
+        [
             &mut self.x,
             &mut self.y,
             &mut self.z,
@@ -75,7 +76,11 @@ impl Points {
             &mut self.nz,
             &mut self.t,
             &mut self.gate,
-        ] {
+        ]
+    }
+
+    pub fn clear(&mut self) {
+        for v in self.float_columns() {
             v.clear();
         }
         self.tag.clear();
@@ -83,16 +88,7 @@ impl Points {
 
     /// Room for `n` more points without reallocating.
     pub fn reserve(&mut self, n: usize) {
-        for v in [
-            &mut self.x,
-            &mut self.y,
-            &mut self.z,
-            &mut self.nx,
-            &mut self.ny,
-            &mut self.nz,
-            &mut self.t,
-            &mut self.gate,
-        ] {
+        for v in self.float_columns() {
             v.reserve(n);
         }
         self.tag.reserve(n);
