@@ -65,25 +65,27 @@
 //! which is why the measured patch radius replaced it.
 //!
 //! One concern per file: `window_table.rs` (the summed-area tables and the
-//! window search), `tree.rs` (the k-d tree fallback), `ray_noise.rs` (the
-//! optional noise correction), `grid.rs` (the coarse normals that gate
-//! RANSAC), `config.rs` ([`NormalsConfig`]).
+//! window search), `support.rs` (the support's bounds and centre, walked
+//! once, by the pass-through when it runs first), `tree.rs` (the k-d tree
+//! fallback), `ray_noise.rs` (the optional noise correction), `grid.rs`
+//! (the coarse normals that gate RANSAC), `config.rs` ([`NormalsConfig`]).
 
 use nalgebra::Vector3;
 
-use crate::cloud::CloudView;
+use crate::cloud::{is_measured, CloudView};
 use crate::plane_fit::smallest_eigenvector_3x3;
 
 mod config;
 mod grid;
 mod ray_noise;
+mod support;
 mod tree;
 mod window_table;
 
 pub use config::NormalsConfig;
 pub(crate) use grid::grid_normal;
 pub use ray_noise::{ray_noise_model, ray_noise_variance};
-use window_table::bounds_and_centre;
+pub use support::{PlaneSupport, SupportWalk};
 
 /// How the normals of one call were found.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -126,7 +128,8 @@ fn moments(q: &Vector3<f64>) -> [f64; CHANNELS] {
 #[derive(Debug, Default, Clone)]
 pub struct NormalEstimator {
     table: Vec<[f64; CHANNELS]>,
-    /// The support's pixels in pixel order, and one row of block sums.
+    /// The support's measured pixels in pixel order, and one row of block
+    /// sums.
     order: Vec<u32>,
     block_row: Vec<[f64; CHANNELS]>,
     normals: Vec<Vector3<f64>>,
@@ -179,13 +182,68 @@ impl NormalEstimator {
         config: &NormalsConfig,
         viewpoint: &Vector3<f64>,
     ) -> (&[Vector3<f64>], NormalStats) {
+        // The measured support pixels in pixel order, with their bounds
+        // and centre; the k-d tree takes `support` as given.
+        let mut order = std::mem::take(&mut self.order);
+        order.clear();
+        let walked = SupportWalk::new(cloud.width).and_then(|mut walk| {
+            for &pixel in support {
+                if let Some(p) = cloud.points.get(pixel as usize).filter(|p| is_measured(p)) {
+                    walk.add(pixel as usize, p);
+                    order.push(pixel);
+                }
+            }
+            if !order.is_sorted() {
+                order.sort_unstable();
+            }
+            walk.finish(&order)
+        });
+        let stats = self.estimate_walked(cloud, members, walked, support, config, viewpoint);
+        self.order = order;
+        (&self.normals, stats)
+    }
+
+    /// As [`Self::estimate_with_support`] with the support already walked
+    /// (by the pass-through, `pass_through.rs`): the same normals, bit for
+    /// bit, without a second walk over the plane's points.
+    pub fn estimate_on_plane(
+        &mut self,
+        cloud: &CloudView<'_>,
+        members: &[u32],
+        support: &PlaneSupport<'_>,
+        config: &NormalsConfig,
+        viewpoint: &Vector3<f64>,
+    ) -> (&[Vector3<f64>], NormalStats) {
+        let stats = self.estimate_walked(
+            cloud,
+            members,
+            Some(*support),
+            support.pixels,
+            config,
+            viewpoint,
+        );
+        (&self.normals, stats)
+    }
+
+    /// The normals of `members` from the tables over `walked` (none: every
+    /// normal undefined), the k-d tree fallback over `tree_support`.
+    fn estimate_walked(
+        &mut self,
+        cloud: &CloudView<'_>,
+        members: &[u32],
+        walked: Option<PlaneSupport<'_>>,
+        tree_support: &[u32],
+        config: &NormalsConfig,
+        viewpoint: &Vector3<f64>,
+    ) -> NormalStats {
         self.reset(members.len());
         let mut stats = NormalStats::default();
-        let Some((bounds, centre)) = bounds_and_centre(cloud, support) else {
+        let Some(support) = walked else {
             stats.undefined = members.len();
-            return (&self.normals, stats);
+            return stats;
         };
-        self.build_table(cloud, support, &bounds, &centre);
+        let (bounds, centre) = (support.bounds, support.centre);
+        self.build_table(cloud, support.pixels, &bounds, &centre);
         self.find_windows(cloud, members, &bounds, config, &mut stats);
         let noise_scale = if config.ray_noise_correction {
             1.0
@@ -206,12 +264,12 @@ impl NormalEstimator {
         if !self.fallback.is_empty() {
             stats.from_tree = self.fallback.len();
             stats.undefined +=
-                self.tree_normals(cloud, members, support, k, viewpoint, noise_scale);
+                self.tree_normals(cloud, members, tree_support, k, viewpoint, noise_scale);
         }
         if interior_only {
             stats.border += self.drop_border_normals();
         }
-        (&self.normals, stats)
+        stats
     }
 
     /// Empties the per-call buffers and sizes them for `members` members:
