@@ -74,8 +74,10 @@ use nalgebra::Vector3;
 
 use crate::cloud::{is_measured, CloudView};
 use crate::plane_fit::smallest_eigenvector_3x3;
+use eigen::smallest_eigenvector_sym3;
 
 mod config;
+mod eigen;
 mod grid;
 mod ray_noise;
 mod support;
@@ -305,7 +307,8 @@ impl NormalEstimator {
             let Some(p) = cloud.point(pixel as usize) else {
                 continue;
             };
-            if let Some(n) = normal_from_sums(m, centre, noise_scale, focal) {
+            let solve = smallest_eigenvector_sym3;
+            if let Some(n) = normal_from_sums_by(m, centre, noise_scale, focal, solve) {
                 self.normals[slot] = orient(n, &p, viewpoint);
             } else {
                 stats.undefined += 1;
@@ -340,6 +343,18 @@ pub(crate) fn normal_from_sums(
     noise_scale: f64,
     focal_px: f64,
 ) -> Option<Vector3<f64>> {
+    normal_from_sums_by(m, origin, noise_scale, focal_px, smallest_eigenvector_3x3)
+}
+
+/// As [`normal_from_sums`], the smallest eigenvector from `solve`.
+#[inline]
+fn normal_from_sums_by(
+    m: &[f64; CHANNELS],
+    origin: &Vector3<f64>,
+    noise_scale: f64,
+    focal_px: f64,
+    solve: impl Fn(&[f64; 6]) -> Option<Vector3<f64>>,
+) -> Option<Vector3<f64>> {
     let n = m[0];
     if n < 3.0 {
         return None;
@@ -353,7 +368,7 @@ pub(crate) fn normal_from_sums(
         m[8] / n - my * mz,
         m[9] / n - mz * mz,
     ];
-    let pca = smallest_eigenvector_3x3(&cov)?;
+    let pca = solve(&cov)?;
     if !(noise_scale > 0.0) {
         return Some(pca);
     }
@@ -373,7 +388,7 @@ pub(crate) fn normal_from_sums(
         cov[4] - s2 * ray.y * ray.z,
         cov[5] - s2 * ray.z * ray.z,
     ];
-    Some(smallest_eigenvector_3x3(&corrected).unwrap_or(pca))
+    Some(solve(&corrected).unwrap_or(pca))
 }
 
 /// Flips `n` so that `n . (viewpoint - p) > 0`.
