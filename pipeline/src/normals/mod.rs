@@ -20,7 +20,9 @@
 //! surface, so the fitted normal is the same plane normal with (at least)
 //! the same noise averaging. The 3x3 eigenvector comes from the closed-form
 //! solver in `plane_fit.rs` (checked against nalgebra's symmetric
-//! eigen-decomposition in the tests). The table is built in one pass, each
+//! eigen-decomposition in the tests), for the windows with the smallest
+//! eigenvalue by Newton's method instead of `acos`/`cos` (`eigen.rs`; the
+//! same vector to rounding, tested). The table is built in one pass, each
 //! cell written once.
 //!
 //! **Table cells of 2 x 2 pixels.** A table of ten `f64` per pixel is 80
@@ -67,8 +69,9 @@
 //! One concern per file: `window_table.rs` (the summed-area tables and the
 //! window search), `support.rs` (the support's bounds and centre, walked
 //! once, by the pass-through when it runs first), `tree.rs` (the k-d tree
-//! fallback), `ray_noise.rs` (the optional noise correction), `grid.rs`
-//! (the coarse normals that gate RANSAC), `config.rs` ([`NormalsConfig`]).
+//! fallback), `eigen.rs` (the windows' eigenvector solver), `ray_noise.rs`
+//! (the optional noise correction), `grid.rs` (the coarse normals that gate
+//! RANSAC), `config.rs` ([`NormalsConfig`]).
 
 use nalgebra::Vector3;
 
