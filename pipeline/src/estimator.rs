@@ -25,7 +25,7 @@ use crate::literal::{
     DepthPassThrough, EveryPointRansac, KnnNormalEstimator, KnnOutlierFilter, NormalsNeighbourhood,
     OutlierNeighbourhood, PassThroughMode, RansacScoring,
 };
-use crate::normals::NormalEstimator;
+use crate::normals::{NormalEstimator, PlaneSupport};
 use crate::pass_through::PassThrough;
 use crate::plane_fit::Plane;
 use crate::ransac_planes::{PlaneSegmenter, SegmentedPlane, Threshold};
@@ -554,13 +554,17 @@ impl PaperStages {
             &mut self.ground_normals
         };
         out.clear();
-        let (members, support) =
+        let (members, support, walked) =
             self.pass_through
                 .filter(cloud, segment.inliers, &config.pass_through);
         clock.lap("pass_through");
-        let found = self
-            .normals
-            .estimate(cloud, members, support, segment.rms_m, &config.normals);
+        let found = self.normals.estimate(
+            cloud,
+            members,
+            (support, walked),
+            segment.rms_m,
+            &config.normals,
+        );
         clock.lap("normals");
         let clustering = self.kmeans.cluster(
             found,
@@ -592,24 +596,25 @@ impl PassThroughStage {
     /// The points of `inliers` kept, and the points their normals take
     /// their neighbourhoods from. The depth cut is the plane from here on
     /// (the paper); the surface-uniform sample's normals see all its
-    /// points.
+    /// points, which the pass-through's walk also summarises for them
+    /// (when it can: `PassThrough::filter_plane`).
     fn filter<'a>(
         &'a mut self,
         cloud: &CloudView<'_>,
         inliers: &'a [u32],
         config: &PassThroughConfig,
-    ) -> (&'a [u32], &'a [u32]) {
+    ) -> (&'a [u32], &'a [u32], Option<PlaneSupport<'a>>) {
         let max_points = config.max_points;
         match config.mode {
             PassThroughMode::SurfaceUniform => {
-                let (kept, _) = self
+                let (kept, walked) = self
                     .surface_uniform
-                    .filter(cloud.points, inliers, max_points);
-                (kept, inliers)
+                    .filter_plane(cloud, inliers, max_points);
+                (kept, inliers, walked)
             }
             PassThroughMode::Depth => {
                 let kept = self.depth.filter(cloud.points, inliers, max_points);
-                (kept, kept)
+                (kept, kept, None)
             }
         }
     }
@@ -626,29 +631,30 @@ struct NormalsStage {
 impl NormalsStage {
     /// The normals at `members` from the neighbourhoods among `support`,
     /// oriented towards the camera, on a patch that grows with the plane's
-    /// own noise (`rms_m`).
+    /// own noise (`rms_m`). The windows take `support` from its summary
+    /// when the pass-through made one (`walked`, the same points).
     fn estimate(
         &mut self,
         cloud: &CloudView<'_>,
         members: &[u32],
-        support: &[u32],
+        (support, walked): (&[u32], Option<PlaneSupport<'_>>),
         rms_m: f64,
         config: &NormalsConfig,
     ) -> &[Vector3<f64>] {
         let normals_config = config.for_plane_noise(rms_m);
-        match config.neighbourhood {
-            NormalsNeighbourhood::Window => {
+        let origin = Vector3::zeros();
+        match (config.neighbourhood, walked) {
+            (NormalsNeighbourhood::Window, Some(walked)) => {
                 self.window
-                    .estimate_with_support(
-                        cloud,
-                        members,
-                        support,
-                        &normals_config,
-                        &Vector3::zeros(),
-                    )
+                    .estimate_on_plane(cloud, members, &walked, &normals_config, &origin)
                     .0
             }
-            NormalsNeighbourhood::KdTree => {
+            (NormalsNeighbourhood::Window, None) => {
+                self.window
+                    .estimate_with_support(cloud, members, support, &normals_config, &origin)
+                    .0
+            }
+            (NormalsNeighbourhood::KdTree, _) => {
                 self.kd_tree
                     .estimate(cloud, members, support, &normals_config, &Vector3::zeros())
             }

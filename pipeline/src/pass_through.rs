@@ -23,6 +23,8 @@
 //!   are, and the normals still take their neighbourhoods from all of the
 //!   plane's points (`NormalEstimator::estimate_with_support`).
 
+use crate::cloud::{is_measured, CloudView};
+use crate::normals::{PlaneSupport, SupportWalk};
 use crate::validate::{at_least, InvalidValue};
 use serde::{Deserialize, Serialize};
 use slope_ipc_types::CloudPoint;
@@ -41,6 +43,9 @@ pub struct PassThroughRange {
 /// Reusable buffers of the filter.
 #[derive(Debug, Default, Clone)]
 pub struct PassThrough {
+    /// The members with a reading, in pixel order.
+    valid: Vec<u32>,
+    /// The kept ones among them, when cut.
     kept: Vec<u32>,
 }
 
@@ -60,29 +65,23 @@ impl PassThrough {
         members: &[u32],
         max_points: usize,
     ) -> (&[u32], PassThroughRange) {
-        self.kept.clear();
-        self.kept.extend(members.iter().copied().filter(|&i| {
-            points.get(i as usize).is_some_and(|p| {
-                p.z_m.is_finite() && p.x_m.is_finite() && p.y_m.is_finite() && p.z_m != 0.0
-            })
-        }));
-        if !self.kept.is_sorted() {
-            self.kept.sort_unstable();
-            self.kept.dedup();
-        }
-        let cut = self.kept.len() > max_points;
-        if cut {
-            surface_sample(points, &mut self.kept, max_points);
-        }
+        self.walk(points, members, |_, _| {});
+        let total = self
+            .valid
+            .iter()
+            .map(|&i| footprint(&points[i as usize]))
+            .sum();
+        let cut = self.sample(points, max_points, total);
+        let kept = self.kept(cut);
         let (mut lo, mut hi) = (f64::NAN, f64::NAN);
-        for &i in &self.kept {
+        for &i in kept {
             let p = &points[i as usize];
             let e = f64::from(p.y_m / p.z_m);
             lo = if lo.is_nan() { e } else { lo.min(e) };
             hi = if hi.is_nan() { e } else { hi.max(e) };
         }
         (
-            &self.kept,
+            kept,
             PassThroughRange {
                 min_elevation: lo,
                 max_elevation: hi,
@@ -90,9 +89,99 @@ impl PassThrough {
             },
         )
     }
+
+    /// As [`Self::filter`] (the same kept points), without the elevation
+    /// range, and with the plane's support for its normals from the same
+    /// walk: every member with a reading, their bounding box and centroid
+    /// ([`PlaneSupport`], what `NormalEstimator::estimate_with_support`
+    /// would find in `members`). `None` for the support when that walk
+    /// would differ: members out of pixel order, a member with a finite
+    /// point at depth 0 (no reading here, one there), a view of width 0.
+    pub fn filter_plane(
+        &mut self,
+        cloud: &CloudView<'_>,
+        members: &[u32],
+        max_points: usize,
+    ) -> (&[u32], Option<PlaneSupport<'_>>) {
+        let points = cloud.points;
+        let Some(mut support) = SupportWalk::new(cloud.width) else {
+            return (self.filter(points, members, max_points).0, None);
+        };
+        let mut total = -0.0;
+        let (sorted, zero_depth) = self.walk(points, members, |pixel, p| {
+            support.add(pixel, p);
+            total += footprint(p);
+        });
+        if !sorted || zero_depth {
+            return (self.filter(points, members, max_points).0, None);
+        }
+        let cut = self.sample(points, max_points, total);
+        // `valid` is the members with a point, in their (pixel) order.
+        (self.kept(cut), support.finish(&self.valid))
+    }
+
+    /// Collects the members with a reading into `valid`, each passed to
+    /// `visit` in member order; sorts and dedups `valid` when the members
+    /// are out of pixel order. Returns whether they were in order, and
+    /// whether a member had a finite point at depth 0.
+    fn walk(
+        &mut self,
+        points: &[CloudPoint],
+        members: &[u32],
+        mut visit: impl FnMut(usize, &CloudPoint),
+    ) -> (bool, bool) {
+        self.valid.clear();
+        let (mut sorted, mut zero_depth, mut last) = (true, false, 0);
+        for &i in members {
+            let Some(p) = points.get(i as usize).filter(|p| is_measured(p)) else {
+                continue;
+            };
+            if p.z_m == 0.0 {
+                zero_depth = true;
+                continue;
+            }
+            sorted &= i >= last;
+            last = i;
+            self.valid.push(i);
+            visit(i as usize, p);
+        }
+        if !sorted {
+            self.valid.sort_unstable();
+            self.valid.dedup();
+        }
+        (sorted, zero_depth)
+    }
+
+    /// At most `max_points` of `valid` (surface-uniform, `total` their
+    /// footprints' sum) into `kept` when there are more; returns whether
+    /// it cut any.
+    fn sample(&mut self, points: &[CloudPoint], max_points: usize, total: f64) -> bool {
+        let cut = self.valid.len() > max_points;
+        if cut {
+            surface_sample(points, &self.valid, &mut self.kept, max_points, total);
+        }
+        cut
+    }
+
+    /// The kept points: `kept` when `cut`, else all of `valid`.
+    fn kept(&self, cut: bool) -> &[u32] {
+        if cut {
+            &self.kept
+        } else {
+            &self.valid
+        }
+    }
 }
 
-/// Keeps at most `max_points` of `kept` (pixels in pixel order), each with
+/// A point's footprint on its plane, up to a factor common to the plane:
+/// `|z|^3` (`surface_sample`).
+#[inline]
+fn footprint(p: &CloudPoint) -> f64 {
+    let z = f64::from(p.z_m).abs();
+    z * z * z
+}
+
+/// Keeps at most `max_points` of `valid` (pixels in pixel order), each with
 /// a probability proportional to its pixel's footprint on the plane.
 ///
 /// A pixel sees the solid angle `cos^3(a) / f^2` (a: off the optical axis,
@@ -101,28 +190,29 @@ impl PassThrough {
 /// `z^3 / (f^2 |d|)`: on one plane, a pixel's footprint grows as `z^3`.
 /// Systematic sampling: walking the points in pixel order, a point is kept
 /// when the running sum of footprints crosses the next multiple of
-/// `total / max_points` (once, even if it crosses several).
-fn surface_sample(points: &[CloudPoint], kept: &mut Vec<u32>, max_points: usize) {
-    let footprint = |i: u32| {
-        let z = f64::from(points[i as usize].z_m).abs();
-        z * z * z
-    };
-    let total: f64 = kept.iter().map(|&i| footprint(i)).sum();
+/// `total / max_points` (once, even if it crosses several). `total` is the
+/// footprints' sum over `valid`; the kept points go to `kept`.
+fn surface_sample(
+    points: &[CloudPoint],
+    valid: &[u32],
+    kept: &mut Vec<u32>,
+    max_points: usize,
+    total: f64,
+) {
+    kept.clear();
     if max_points == 0 || !(total.is_finite() && total > 0.0) {
-        kept.truncate(max_points);
+        kept.extend_from_slice(&valid[..max_points.min(valid.len())]);
         return;
     }
     let step = total / max_points as f64;
-    let (mut sum, mut next, mut out) = (0.0, 0.5 * step, 0);
-    for k in 0..kept.len() {
-        sum += footprint(kept[k]);
-        if sum >= next && out < max_points {
-            kept[out] = kept[k];
-            out += 1;
+    let (mut sum, mut next) = (0.0, 0.5 * step);
+    for &i in valid {
+        sum += footprint(&points[i as usize]);
+        if sum >= next && kept.len() < max_points {
+            kept.push(i);
             next += step * ((sum - next) / step).floor().max(0.0) + step;
         }
     }
-    kept.truncate(out);
 }
 
 /// Pass-through filter (`pass_through.rs`).
@@ -195,6 +285,70 @@ mod tests {
         assert!(kept.windows(2).all(|w| w[0] < w[1]));
         // A cap above the count keeps everything.
         assert_eq!(pt.filter(&pts, &members, 2000).0.len(), 2000);
+    }
+
+    /// The support `filter_plane` hands the normals gives them the normals
+    /// `estimate_with_support` finds from the plane's pixels, bit for bit,
+    /// and the same kept points as `filter`; members out of order or a
+    /// finite point at depth 0 give no support (the normals walk
+    /// themselves).
+    #[test]
+    fn filter_plane_hands_the_normals_the_support_they_would_walk() {
+        use crate::fixtures::{Scene, SceneCloud};
+        use crate::normals::{NormalEstimator, NormalsConfig};
+        use nalgebra::Vector3;
+
+        let scene = Scene::ramp(30.0);
+        let mut cloud = SceneCloud::render_with_intrinsics(&scene, 256, 212, 180.0, 0.002, 3);
+        // Members without a reading, and one at the edge of the image.
+        for i in [0, 1000, 1001, 20_000] {
+            cloud.points[i] = CloudPoint::INVALID;
+        }
+        let members: Vec<u32> = (0..cloud.points.len() as u32).step_by(2).collect();
+        let view = cloud.view();
+        let mut pt = PassThrough::new();
+        let expected = pt.filter(view.points, &members, 3000).0.to_vec();
+        assert_eq!(expected.len(), 3000);
+        let (kept, support) = pt.filter_plane(&view, &members, 3000);
+        assert_eq!(kept, expected);
+        let support = support.expect("members in pixel order");
+        let measured = |&&i: &&u32| crate::cloud::is_measured(&cloud.points[i as usize]);
+        let with_reading: Vec<u32> = members.iter().filter(measured).copied().collect();
+        assert_eq!(with_reading.len(), members.len() - 3);
+        assert_eq!(support.pixels(), with_reading);
+        let (origin, mut walked, mut own) = (
+            Vector3::zeros(),
+            NormalEstimator::new(),
+            NormalEstimator::new(),
+        );
+        for interior_only in [false, true] {
+            let cfg = NormalsConfig {
+                interior_only,
+                ..NormalsConfig::default()
+            };
+            let (a, a_stats) = walked.estimate_on_plane(&view, kept, &support, &cfg, &origin);
+            let (b, b_stats) = own.estimate_with_support(&view, kept, &members, &cfg, &origin);
+            assert_eq!(a_stats, b_stats);
+            assert!(a_stats.from_window > 2000, "{a_stats:?}");
+            let bits = |n: &[Vector3<f64>]| -> Vec<[u64; 3]> {
+                n.iter()
+                    .map(|n| [n.x.to_bits(), n.y.to_bits(), n.z.to_bits()])
+                    .collect()
+            };
+            assert_eq!(bits(a), bits(b));
+        }
+        // Out of pixel order: the same kept points, no support.
+        let reversed: Vec<u32> = members.iter().rev().copied().collect();
+        let (kept, support) = pt.filter_plane(&view, &reversed, 3000);
+        assert_eq!(kept, expected);
+        assert!(support.is_none());
+        // A finite point at depth 0: dropped here, a neighbour there.
+        cloud.points[members[7] as usize].z_m = 0.0;
+        let view = cloud.view();
+        let expected = pt.filter(view.points, &members, 3000).0.to_vec();
+        let (kept, support) = pt.filter_plane(&view, &members, 3000);
+        assert_eq!(kept, expected);
+        assert!(support.is_none());
     }
 
     #[test]

@@ -20,7 +20,9 @@
 //! surface, so the fitted normal is the same plane normal with (at least)
 //! the same noise averaging. The 3x3 eigenvector comes from the closed-form
 //! solver in `plane_fit.rs` (checked against nalgebra's symmetric
-//! eigen-decomposition in the tests). The table is built in one pass, each
+//! eigen-decomposition in the tests), for the windows with the smallest
+//! eigenvalue by Newton's method instead of `acos`/`cos` (`eigen.rs`; the
+//! same vector to rounding, tested). The table is built in one pass, each
 //! cell written once.
 //!
 //! **Table cells of 2 x 2 pixels.** A table of ten `f64` per pixel is 80
@@ -65,25 +67,30 @@
 //! which is why the measured patch radius replaced it.
 //!
 //! One concern per file: `window_table.rs` (the summed-area tables and the
-//! window search), `tree.rs` (the k-d tree fallback), `ray_noise.rs` (the
-//! optional noise correction), `grid.rs` (the coarse normals that gate
+//! window search), `support.rs` (the support's bounds and centre, walked
+//! once, by the pass-through when it runs first), `tree.rs` (the k-d tree
+//! fallback), `eigen.rs` (the windows' eigenvector solver), `ray_noise.rs`
+//! (the optional noise correction), `grid.rs` (the coarse normals that gate
 //! RANSAC), `config.rs` ([`NormalsConfig`]).
 
 use nalgebra::Vector3;
 
-use crate::cloud::CloudView;
+use crate::cloud::{is_measured, CloudView};
 use crate::plane_fit::smallest_eigenvector_3x3;
+use eigen::smallest_eigenvector_sym3;
 
 mod config;
+mod eigen;
 mod grid;
 mod ray_noise;
+mod support;
 mod tree;
 mod window_table;
 
 pub use config::NormalsConfig;
 pub(crate) use grid::grid_normal;
 pub use ray_noise::{ray_noise_model, ray_noise_variance};
-use window_table::bounds_and_centre;
+pub use support::{PlaneSupport, SupportWalk};
 
 /// How the normals of one call were found.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -126,7 +133,8 @@ fn moments(q: &Vector3<f64>) -> [f64; CHANNELS] {
 #[derive(Debug, Default, Clone)]
 pub struct NormalEstimator {
     table: Vec<[f64; CHANNELS]>,
-    /// The support's pixels in pixel order, and one row of block sums.
+    /// The support's measured pixels in pixel order, and one row of block
+    /// sums.
     order: Vec<u32>,
     block_row: Vec<[f64; CHANNELS]>,
     normals: Vec<Vector3<f64>>,
@@ -179,13 +187,68 @@ impl NormalEstimator {
         config: &NormalsConfig,
         viewpoint: &Vector3<f64>,
     ) -> (&[Vector3<f64>], NormalStats) {
+        // The measured support pixels in pixel order, with their bounds
+        // and centre; the k-d tree takes `support` as given.
+        let mut order = std::mem::take(&mut self.order);
+        order.clear();
+        let walked = SupportWalk::new(cloud.width).and_then(|mut walk| {
+            for &pixel in support {
+                if let Some(p) = cloud.points.get(pixel as usize).filter(|p| is_measured(p)) {
+                    walk.add(pixel as usize, p);
+                    order.push(pixel);
+                }
+            }
+            if !order.is_sorted() {
+                order.sort_unstable();
+            }
+            walk.finish(&order)
+        });
+        let stats = self.estimate_walked(cloud, members, walked, support, config, viewpoint);
+        self.order = order;
+        (&self.normals, stats)
+    }
+
+    /// As [`Self::estimate_with_support`] with the support already walked
+    /// (by the pass-through, `pass_through.rs`): the same normals, bit for
+    /// bit, without a second walk over the plane's points.
+    pub fn estimate_on_plane(
+        &mut self,
+        cloud: &CloudView<'_>,
+        members: &[u32],
+        support: &PlaneSupport<'_>,
+        config: &NormalsConfig,
+        viewpoint: &Vector3<f64>,
+    ) -> (&[Vector3<f64>], NormalStats) {
+        let stats = self.estimate_walked(
+            cloud,
+            members,
+            Some(*support),
+            support.pixels,
+            config,
+            viewpoint,
+        );
+        (&self.normals, stats)
+    }
+
+    /// The normals of `members` from the tables over `walked` (none: every
+    /// normal undefined), the k-d tree fallback over `tree_support`.
+    fn estimate_walked(
+        &mut self,
+        cloud: &CloudView<'_>,
+        members: &[u32],
+        walked: Option<PlaneSupport<'_>>,
+        tree_support: &[u32],
+        config: &NormalsConfig,
+        viewpoint: &Vector3<f64>,
+    ) -> NormalStats {
         self.reset(members.len());
         let mut stats = NormalStats::default();
-        let Some((bounds, centre)) = bounds_and_centre(cloud, support) else {
+        let Some(support) = walked else {
             stats.undefined = members.len();
-            return (&self.normals, stats);
+            return stats;
         };
-        self.build_table(cloud, support, &bounds, &centre);
+        let (bounds, centre) = (support.bounds, support.centre);
+        self.build_table(cloud, support.pixels, &bounds, &centre);
         self.find_windows(cloud, members, &bounds, config, &mut stats);
         let noise_scale = if config.ray_noise_correction {
             1.0
@@ -206,12 +269,12 @@ impl NormalEstimator {
         if !self.fallback.is_empty() {
             stats.from_tree = self.fallback.len();
             stats.undefined +=
-                self.tree_normals(cloud, members, support, k, viewpoint, noise_scale);
+                self.tree_normals(cloud, members, tree_support, k, viewpoint, noise_scale);
         }
         if interior_only {
             stats.border += self.drop_border_normals();
         }
-        (&self.normals, stats)
+        stats
     }
 
     /// Empties the per-call buffers and sizes them for `members` members:
@@ -247,7 +310,8 @@ impl NormalEstimator {
             let Some(p) = cloud.point(pixel as usize) else {
                 continue;
             };
-            if let Some(n) = normal_from_sums(m, centre, noise_scale, focal) {
+            let solve = smallest_eigenvector_sym3;
+            if let Some(n) = normal_from_sums_by(m, centre, noise_scale, focal, solve) {
                 self.normals[slot] = orient(n, &p, viewpoint);
             } else {
                 stats.undefined += 1;
@@ -282,6 +346,18 @@ pub(crate) fn normal_from_sums(
     noise_scale: f64,
     focal_px: f64,
 ) -> Option<Vector3<f64>> {
+    normal_from_sums_by(m, origin, noise_scale, focal_px, smallest_eigenvector_3x3)
+}
+
+/// As [`normal_from_sums`], the smallest eigenvector from `solve`.
+#[inline]
+fn normal_from_sums_by(
+    m: &[f64; CHANNELS],
+    origin: &Vector3<f64>,
+    noise_scale: f64,
+    focal_px: f64,
+    solve: impl Fn(&[f64; 6]) -> Option<Vector3<f64>>,
+) -> Option<Vector3<f64>> {
     let n = m[0];
     if n < 3.0 {
         return None;
@@ -295,7 +371,7 @@ pub(crate) fn normal_from_sums(
         m[8] / n - my * mz,
         m[9] / n - mz * mz,
     ];
-    let pca = smallest_eigenvector_3x3(&cov)?;
+    let pca = solve(&cov)?;
     if !(noise_scale > 0.0) {
         return Some(pca);
     }
@@ -315,7 +391,7 @@ pub(crate) fn normal_from_sums(
         cov[4] - s2 * ray.y * ray.z,
         cov[5] - s2 * ray.z * ray.z,
     ];
-    Some(smallest_eigenvector_3x3(&corrected).unwrap_or(pca))
+    Some(solve(&corrected).unwrap_or(pca))
 }
 
 /// Flips `n` so that `n . (viewpoint - p) > 0`.

@@ -66,24 +66,20 @@ impl NormalEstimator {
     }
 
     /// Summed-area tables of the ten moments over the bounding box, one
-    /// cell per `TABLE_CELL_PX` x `TABLE_CELL_PX` block of pixels.
+    /// cell per `TABLE_CELL_PX` x `TABLE_CELL_PX` block of pixels, from
+    /// `pixels`: measured, in pixel order, inside `b` (a [`PlaneSupport`]'s).
+    ///
+    /// [`PlaneSupport`]: super::PlaneSupport
     pub(super) fn build_table(
         &mut self,
         cloud: &CloudView<'_>,
-        members: &[u32],
+        pixels: &[u32],
         b: &Bounds,
         c: &Vector3<f64>,
     ) {
         let g = TABLE_CELL_PX;
         let (bw, bh) = (b.width.div_ceil(g), b.height.div_ceil(g));
         let tw = bw + 1;
-        // The members' moments summed per block, a row of blocks at a
-        // time; members in pixel order (as inliers are) need no sort.
-        self.order.clear();
-        self.order.extend_from_slice(members);
-        if !self.order.is_sorted() {
-            self.order.sort_unstable();
-        }
         self.block_row.clear();
         self.block_row.resize(bw, [0.0; CHANNELS]);
         // One pass, row by row: each cell is written once.
@@ -91,9 +87,9 @@ impl NormalEstimator {
         self.table.reserve(tw * (bh + 1));
         self.table
             .extend(std::iter::repeat_n([0.0; CHANNELS], tw + 1));
-        let mut next = 0;
+        let mut rest = pixels;
         for bv in 0..bh {
-            self.sum_block_row(cloud, b, c, bv, &mut next);
+            rest = self.sum_block_row(cloud, rest, b, c, bv);
             let mut run = [0.0; CHANNELS];
             for bu in 0..bw {
                 let above = &self.table[bv * tw + bu + 1];
@@ -110,17 +106,18 @@ impl NormalEstimator {
         }
     }
 
-    /// The moments (relative to `c`) of the sorted members in the pixel
-    /// rows of block row `bv`, summed per block into `block_row`; `next`
-    /// is the first member not yet summed, and moves past these rows.
-    fn sum_block_row(
+    /// The moments (relative to `c`) of the pixels of `pixels` (measured,
+    /// in pixel order, inside `b`) that lie in the pixel rows of block row
+    /// `bv`, the first ones of `pixels`, summed per block into
+    /// `block_row`; returns the pixels after these rows.
+    fn sum_block_row<'p>(
         &mut self,
         cloud: &CloudView<'_>,
+        mut pixels: &'p [u32],
         b: &Bounds,
         c: &Vector3<f64>,
         bv: usize,
-        next: &mut usize,
-    ) {
+    ) -> &'p [u32] {
         let g = TABLE_CELL_PX;
         let w = cloud.width;
         self.block_row.fill([0.0; CHANNELS]);
@@ -130,22 +127,16 @@ impl NormalEstimator {
         for v in b.v0 + bv * g..(b.v0 + (bv + 1) * g).min(b.v0 + b.height) {
             let row_start = v * w;
             let (first, end) = (row_start + b.u0, row_start + w);
-            let order = &self.order;
-            // The row's members from `next` on: (block, moments) of each
-            // measured one inside the bounds.
-            let mut members = std::iter::from_fn(|| {
-                while let Some(&pixel) = order.get(*next).filter(|&&p| (p as usize) < end) {
-                    *next += 1;
-                    let pixel = pixel as usize;
-                    let (Some(u), Some(p)) = (
-                        pixel.checked_sub(first).filter(|&u| u < b.width),
-                        cloud.points.get(pixel).filter(|p| is_measured(p)),
-                    ) else {
-                        continue;
-                    };
-                    return Some((u / g, moments(&(to_vec3(p) - c))));
-                }
-                None
+            let in_row = pixels.partition_point(|&p| (p as usize) < end);
+            let (row, after) = pixels.split_at(in_row);
+            pixels = after;
+            // (block, moments) of each of the row's pixels.
+            let mut members = row.iter().map(|&pixel| {
+                let pixel = pixel as usize;
+                (
+                    (pixel - first) / g,
+                    moments(&(to_vec3(&cloud.points[pixel]) - c)),
+                )
             });
             let Some((mut at, mut sums)) = members.next() else {
                 continue;
@@ -160,6 +151,7 @@ impl NormalEstimator {
             }
             add_into(&mut self.block_row[at], &sums);
         }
+        pixels
     }
 }
 
@@ -216,43 +208,4 @@ fn smallest_window(
         }
     }
     None
-}
-
-/// Bounding box of the members' pixels and their centroid.
-pub(super) fn bounds_and_centre(
-    cloud: &CloudView<'_>,
-    members: &[u32],
-) -> Option<(Bounds, Vector3<f64>)> {
-    let w = cloud.width;
-    if w == 0 {
-        // No pixel grid (a malformed view): no pixel has a place in it.
-        return None;
-    }
-    let (mut u0, mut v0, mut u1, mut v1) = (usize::MAX, usize::MAX, 0, 0);
-    let mut sum = Vector3::zeros();
-    let mut count = 0usize;
-    for &pixel in members {
-        let pixel = pixel as usize;
-        let Some(p) = cloud.point(pixel) else {
-            continue;
-        };
-        let (u, v) = (pixel % w, pixel / w);
-        u0 = u0.min(u);
-        v0 = v0.min(v);
-        u1 = u1.max(u);
-        v1 = v1.max(v);
-        sum += p;
-        count += 1;
-    }
-    (count > 0).then(|| {
-        (
-            Bounds {
-                u0,
-                v0,
-                width: u1 - u0 + 1,
-                height: v1 - v0 + 1,
-            },
-            sum / count as f64,
-        )
-    })
 }
