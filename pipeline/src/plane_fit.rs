@@ -247,6 +247,17 @@ pub fn smallest_eigenvector_3x3(cov: &[f64; 6]) -> Option<Vector3<f64>> {
     let r = (det / (2.0 * p * p * p)).clamp(-1.0, 1.0);
     let phi = r.acos() / 3.0;
     let lambda = q + 2.0 * p * (phi + 2.0 * std::f64::consts::FRAC_PI_3).cos();
+    eigenvector_for(cov, lambda, p2)
+}
+
+/// The unit eigenvector of eigenvalue `lambda` of the symmetric matrix
+/// `cov` (as in [`smallest_eigenvector_3x3`]): the longest cross product of
+/// two rows of `A - lambda I`; `None` when that product vanishes against
+/// `p2` (six times the eigenvalues' variance), i.e. when `lambda` is not
+/// separated from another eigenvalue.
+#[inline]
+pub(crate) fn eigenvector_for(cov: &[f64; 6], lambda: f64, p2: f64) -> Option<Vector3<f64>> {
+    let [xx, xy, xz, yy, yz, zz] = *cov;
     let r0 = Vector3::new(xx - lambda, xy, xz);
     let r1 = Vector3::new(xy, yy - lambda, yz);
     let r2 = Vector3::new(xz, yz, zz - lambda);

@@ -8,7 +8,7 @@
 
 use nalgebra::Vector3;
 
-use crate::plane_fit::smallest_eigenvector_3x3;
+use crate::plane_fit::{eigenvector_for, smallest_eigenvector_3x3};
 
 /// The unit eigenvector of the smallest eigenvalue of the symmetric
 /// positive semi-definite matrix `[[xx, xy, xz], [xy, yy, yz], [xz, yz,
@@ -37,25 +37,7 @@ pub(super) fn smallest_eigenvector_sym3(cov: &[f64; 6]) -> Option<Vector3<f64>> 
     let Some(lambda) = smallest_eigenvalue(cov) else {
         return smallest_eigenvector_3x3(cov);
     };
-    let r0 = Vector3::new(xx - lambda, xy, xz);
-    let r1 = Vector3::new(xy, yy - lambda, yz);
-    let r2 = Vector3::new(xz, yz, zz - lambda);
-    let c01 = r0.cross(&r1);
-    let c02 = r0.cross(&r2);
-    let c12 = r1.cross(&r2);
-    let (n01, n02, n12) = (c01.norm_squared(), c02.norm_squared(), c12.norm_squared());
-    let (best, norm_sq) = if n01 >= n02 && n01 >= n12 {
-        (c01, n01)
-    } else if n02 >= n12 {
-        (c02, n02)
-    } else {
-        (c12, n12)
-    };
-    // The cross product vanishes when the two smaller eigenvalues coincide.
-    if !(norm_sq > 1e-20 * p2 * p2) {
-        return None;
-    }
-    Some(best / norm_sq.sqrt())
+    eigenvector_for(cov, lambda, p2)
 }
 
 /// The smallest eigenvalue by Newton's method from 0
