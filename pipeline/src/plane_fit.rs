@@ -234,13 +234,8 @@ pub fn fit_tls(moments: &Moments) -> Option<Plane> {
 #[inline]
 pub fn smallest_eigenvector_3x3(cov: &[f64; 6]) -> Option<Vector3<f64>> {
     let [xx, xy, xz, yy, yz, zz] = *cov;
-    let q = (xx + yy + zz) / 3.0;
-    let p1 = xy * xy + xz * xz + yz * yz;
+    let (q, p2) = eigen_spread(cov)?;
     let (a, b, c) = (xx - q, yy - q, zz - q);
-    let p2 = a * a + b * b + c * c + 2.0 * p1;
-    if !(p2 > 0.0) || !p2.is_finite() {
-        return None;
-    }
     let p = (p2 / 6.0).sqrt();
     // det(A - q I) / p^3 / 2
     let det = a * (b * c - yz * yz) - xy * (xy * c - yz * xz) + xz * (xy * yz - b * xz);
@@ -250,11 +245,25 @@ pub fn smallest_eigenvector_3x3(cov: &[f64; 6]) -> Option<Vector3<f64>> {
     eigenvector_for(cov, lambda, p2)
 }
 
+/// The mean `q` of the eigenvalues of the symmetric matrix `cov` (as in
+/// [`smallest_eigenvector_3x3`]) and `p2`, the sum of their squared
+/// deviations from it (`tr((A - q I)^2)`); `None` unless `p2` is finite and
+/// positive (a matrix with a non-finite entry, or a multiple of I).
+#[inline]
+pub(crate) fn eigen_spread(cov: &[f64; 6]) -> Option<(f64, f64)> {
+    let [xx, xy, xz, yy, yz, zz] = *cov;
+    let q = (xx + yy + zz) / 3.0;
+    let p1 = xy * xy + xz * xz + yz * yz;
+    let (a, b, c) = (xx - q, yy - q, zz - q);
+    let p2 = a * a + b * b + c * c + 2.0 * p1;
+    (p2 > 0.0 && p2.is_finite()).then_some((q, p2))
+}
+
 /// The unit eigenvector of eigenvalue `lambda` of the symmetric matrix
 /// `cov` (as in [`smallest_eigenvector_3x3`]): the longest cross product of
 /// two rows of `A - lambda I`; `None` when that product vanishes against
-/// `p2` (six times the eigenvalues' variance), i.e. when `lambda` is not
-/// separated from another eigenvalue.
+/// `p2` ([`eigen_spread`]), i.e. when `lambda` is not separated from
+/// another eigenvalue.
 #[inline]
 pub(crate) fn eigenvector_for(cov: &[f64; 6], lambda: f64, p2: f64) -> Option<Vector3<f64>> {
     let [xx, xy, xz, yy, yz, zz] = *cov;

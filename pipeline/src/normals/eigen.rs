@@ -8,7 +8,7 @@
 
 use nalgebra::Vector3;
 
-use crate::plane_fit::{eigenvector_for, smallest_eigenvector_3x3};
+use crate::plane_fit::{eigen_spread, eigenvector_for, smallest_eigenvector_3x3};
 
 /// The unit eigenvector of the smallest eigenvalue of the symmetric
 /// positive semi-definite matrix `[[xx, xy, xz], [xy, yy, yz], [xz, yz,
@@ -26,14 +26,7 @@ use crate::plane_fit::{eigenvector_for, smallest_eigenvector_3x3};
 /// trigonometric solver answers.
 #[inline]
 pub(super) fn smallest_eigenvector_sym3(cov: &[f64; 6]) -> Option<Vector3<f64>> {
-    let [xx, xy, xz, yy, yz, zz] = *cov;
-    let q = (xx + yy + zz) / 3.0;
-    let p1 = xy * xy + xz * xz + yz * yz;
-    let (a, b, c) = (xx - q, yy - q, zz - q);
-    let p2 = a * a + b * b + c * c + 2.0 * p1;
-    if !(p2 > 0.0) || !p2.is_finite() {
-        return None;
-    }
+    let (_, p2) = eigen_spread(cov)?;
     let Some(lambda) = smallest_eigenvalue(cov) else {
         return smallest_eigenvector_3x3(cov);
     };
