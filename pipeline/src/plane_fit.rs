@@ -313,6 +313,20 @@ pub fn fit_least_squares(moments: &Moments) -> Option<Plane> {
     Plane::from_point_normal(&moments.mean()?, &n)
 }
 
+/// The six entries `[xx, xy, xz, yy, yz, zz]` of a symmetric matrix, as
+/// the eigenvector solvers take a covariance (tests only).
+#[cfg(test)]
+pub(crate) fn upper_triangle(m: &Matrix3<f64>) -> [f64; 6] {
+    [
+        m[(0, 0)],
+        m[(0, 1)],
+        m[(0, 2)],
+        m[(1, 1)],
+        m[(1, 2)],
+        m[(2, 2)],
+    ]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -465,15 +479,7 @@ mod tests {
                 + c * c.transpose() * rng.random_range(0.0..0.05))
                 * scale;
             let (oracle, _) = smallest_eigenvector(&m).unwrap();
-            let fast = smallest_eigenvector_3x3(&[
-                m[(0, 0)],
-                m[(0, 1)],
-                m[(0, 2)],
-                m[(1, 1)],
-                m[(1, 2)],
-                m[(2, 2)],
-            ])
-            .unwrap();
+            let fast = smallest_eigenvector_3x3(&upper_triangle(&m)).unwrap();
             let eig = SymmetricEigen::new(m);
             let mut ev: Vec<f64> = eig.eigenvalues.iter().copied().collect();
             ev.sort_by(f64::total_cmp);

@@ -68,6 +68,7 @@ const MAX_NEWTON_STEPS: usize = 12;
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::plane_fit::upper_triangle;
     use nalgebra::{Matrix3, SymmetricEigen};
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
@@ -103,14 +104,7 @@ mod tests {
             let d = Matrix3::from_diagonal(&Vector3::new(l1, l2, l3));
             let a = basis * d * basis.transpose() * scale;
             let a = (a + a.transpose()) * 0.5;
-            let cov = [
-                a[(0, 0)],
-                a[(0, 1)],
-                a[(0, 2)],
-                a[(1, 1)],
-                a[(1, 2)],
-                a[(2, 2)],
-            ];
+            let cov = upper_triangle(&a);
             if k % 3 == 0 {
                 planar += 1;
                 settled += usize::from(smallest_eigenvalue(&cov).is_some());
