@@ -191,10 +191,10 @@ fn smallest_window(
         // The table cells the window's pixels touch.
         let (a0, a1) = (u.saturating_sub(r) / g, ((u + r) / g + 1).min(bw));
         let (b0, b1) = (v.saturating_sub(r) / g, ((v + r) / g + 1).min(bh));
-        let s = |c: usize| {
-            table[b1 * tw + a1][c] - table[b0 * tw + a1][c] - table[b1 * tw + a0][c]
-                + table[b0 * tw + a0][c]
-        };
+        // The four corners once (not their index arithmetic per channel).
+        let (p11, p01) = (&table[b1 * tw + a1], &table[b0 * tw + a1]);
+        let (p10, p00) = (&table[b1 * tw + a0], &table[b0 * tw + a0]);
+        let s = |c: usize| p11[c] - p01[c] - p10[c] + p00[c];
         let count = s(0);
         if count + 0.5 >= k as f64 {
             let mut m = [0.0; CHANNELS];

@@ -171,8 +171,8 @@ impl StatisticalOutlierFilter {
 /// reading. The `K` offsets share one other row, so the centre row is
 /// loaded once for all of them.
 #[inline(always)]
-fn pair_distances<const K: usize>(
-    planes: [&[f32]; 3],
+fn pair_distances<'a, const K: usize>(
+    planes: [&'a [f32]; 3],
     first: usize,
     other: usize,
     out: &mut [f32],
@@ -185,12 +185,12 @@ fn pair_distances<const K: usize>(
         &ys[first..first + n],
         &zs[first..first + n],
     );
-    let wide = n + K - 1;
-    let (ox, oy, oz) = (
-        &xs[other..other + wide],
-        &ys[other..other + wide],
-        &zs[other..other + wide],
-    );
+    // The other row at each offset, re-sliced to `[..n]` like the output
+    // rows: `o[k][u]` then needs no index arithmetic in the loop (a checked
+    // `u + k` in builds with overflow checks stops the loop vectorising).
+    let shifted =
+        |plane: &'a [f32]| -> [&'a [f32]; K] { std::array::from_fn(|k| &plane[other + k..][..n]) };
+    let (ox, oy, oz) = (shifted(xs), shifted(ys), shifted(zs));
     let mut rows = out.chunks_exact_mut(n);
     // `out` holds exactly K rows of n, so the default (empty) row is never
     // taken. Each row is re-sliced to `[..n]`: its length is then known to
@@ -202,9 +202,9 @@ fn pair_distances<const K: usize>(
     for u in 0..n {
         let (x, y, z) = (cx[u], cy[u], cz[u]);
         for (k, row) in outs.iter_mut().enumerate() {
-            let dx = x - ox[u + k];
-            let dy = y - oy[u + k];
-            let dz = z - oz[u + k];
+            let dx = x - ox[k][u];
+            let dy = y - oy[k][u];
+            let dz = z - oz[k][u];
             row[u] = (dx * dx + dy * dy + dz * dz).sqrt();
         }
     }
