@@ -11,7 +11,7 @@
 //! | `ransac_planes/` | 2. RANSAC plane segmentation (sample grid, f32 inlier test, hypotheses, regions, labelling) |
 //! | `pass_through.rs` | 3. pass-through filter (at most 10,000 points a plane) |
 //! | `normals/` | 4. PCA normals over K = 100 neighbours (window tables, k-d tree fallback, coarse grid normals) |
-//! | `cosine_kmeans.rs` | 5. cosine k-means, dominant cluster |
+//! | `cosine_kmeans/` | 5. cosine k-means, dominant cluster (farthest-first centres, f32 assignment and cluster sums, Lloyd iterations, merge) |
 //! | `cumulative_angle.rs` | 6. cumulative averaging of the angle |
 //! | `plane_fit.rs` | TLS and least-squares plane fits (baselines) |
 //! | `baseline.rs` | the least-squares and TLS baselines: each chosen plane's pixels fitted by one plane |
