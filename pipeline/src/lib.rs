@@ -22,6 +22,8 @@
 //! | `tracking.rs` | the slope of the plane ahead followed over frames |
 //! | `message.rs` | an estimate written into the `SlopeEstimate` message |
 //! | `estimator.rs` | orchestration and timings |
+//! | `estimate.rs` | what the estimator returns: the estimate, its planes and timings |
+//! | `inspection.rs` | what the estimator saw in its last frame (planes, roles, sampled normals) |
 //! | `literal/` | the paper's stages as written (k-d tree neighbours, every-point RANSAC, depth pass-through): the `paper-literal` preset |
 
 // `!(x > 0.0)` is how this crate says "not a positive number, NaN
@@ -34,10 +36,12 @@ pub mod confidence;
 pub mod config;
 pub mod cosine_kmeans;
 pub mod cumulative_angle;
+mod estimate;
 pub mod estimator;
 mod finish;
 #[doc(hidden)]
 pub mod fixtures;
+mod inspection;
 pub mod literal;
 pub mod message;
 pub mod normals;
