@@ -7,6 +7,10 @@
 //! inliers by ordinary least squares or TLS (`baseline.rs`).
 //! Either method's fit becomes the estimate (sign, distance, confidence)
 //! in `finish.rs`.
+//!
+//! What it returns ([`Estimate`], `estimate.rs`) and what it saw
+//! ([`Inspection`], `inspection.rs`) are data in files of their own,
+//! re-exported here.
 
 use std::time::Instant;
 
@@ -33,7 +37,10 @@ use crate::selection::{
     chosen_segments, select_ground, select_inclined, Ground, PlaneSegment, PlaneSummary, Selection,
 };
 use crate::statistical_outlier::StatisticalOutlierFilter;
-use crate::tracking::{FrameSlope, SlopeTracker, TrackedSlope};
+use crate::tracking::{FrameSlope, SlopeTracker};
+
+pub use crate::estimate::{Estimate, PlaneEstimate, StageTimings};
+pub use crate::inspection::{InspectedNormal, Inspection};
 
 /// Where a frame sits in its stream.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -43,88 +50,6 @@ pub struct FrameInfo {
     /// Capture time, nanoseconds (any epoch). Carried with the frame; the
     /// tracker counts frames, not time.
     pub stamp_ns: u64,
-}
-
-/// A fitted plane in the estimate.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PlaneEstimate {
-    /// `[a, b, c, d]`: `a x + b y + c z + d = 0`, `(a, b, c)` a unit normal
-    /// towards the camera side.
-    pub coefficients: [f64; 4],
-    /// RANSAC inliers of the plane (of all its segments for the ground).
-    pub inliers: u32,
-    /// RMS distance of the inliers from the plane, metres.
-    pub rms_m: f64,
-    /// Surface the inliers cover, square metres.
-    pub area_m2: f64,
-}
-
-/// Milliseconds per stage.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct StageTimings {
-    pub total_ms: f64,
-    /// Stage name and milliseconds, in pipeline order.
-    pub stages: Vec<(&'static str, f64)>,
-}
-
-impl StageTimings {
-    /// The time of a stage, 0 when it did not run.
-    pub fn stage_ms(&self, name: &str) -> f64 {
-        self.stages
-            .iter()
-            .filter(|(n, _)| *n == name)
-            .map(|(_, ms)| ms)
-            .sum()
-    }
-}
-
-/// The result for one frame.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Estimate {
-    pub status: EstimateStatus,
-    pub method: SlopeMethod,
-    /// Signed slope, degrees: + uphill, - downhill; NaN unless `Ok`.
-    pub slope_deg: f64,
-    /// Spread of the averaged angle samples, degrees; NaN for the
-    /// baselines (one fit, no spread: a planner gating on the spread must
-    /// not trust them blindly; use the confidence).
-    pub slope_std_deg: f64,
-    /// Angle samples averaged (1 for the baselines).
-    pub samples: u32,
-    /// Distance to the inclined plane along the optical axis, metres.
-    pub distance_m: f64,
-    pub ground: Option<PlaneEstimate>,
-    pub inclined: Option<PlaneEstimate>,
-    /// True when the ground normal is the mount's up vector.
-    pub ground_from_mount: bool,
-    /// How far to trust `slope_deg`, 0..=1 (0 unless `Ok`).
-    pub confidence: f64,
-    /// Why the confidence is below 1: bits of
-    /// `slope_ipc_types::confidence`.
-    pub confidence_reasons: u32,
-    /// The slope followed over frames (`Estimator::estimate_frame`).
-    pub tracked: Option<TrackedSlope>,
-    pub timings: StageTimings,
-}
-
-impl Estimate {
-    fn failed(status: EstimateStatus, method: SlopeMethod) -> Self {
-        Self {
-            status,
-            method,
-            slope_deg: f64::NAN,
-            slope_std_deg: f64::NAN,
-            samples: 0,
-            distance_m: f64::NAN,
-            ground: None,
-            inclined: None,
-            ground_from_mount: false,
-            confidence: 0.0,
-            confidence_reasons: 0,
-            tracked: None,
-            timings: StageTimings::default(),
-        }
-    }
 }
 
 /// Times stages into a [`StageTimings`].
@@ -158,37 +83,6 @@ impl Stopwatch {
         self.timings.total_ms = self.start.elapsed().as_secs_f64() * 1e3;
         self.timings
     }
-}
-
-/// One normal the paper method sampled, for pictures and exports.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct InspectedNormal {
-    /// The pixel (row-major index) the normal was computed at.
-    pub pixel: u32,
-    /// Unit normal, camera frame.
-    pub normal: [f32; 3],
-    /// True when the cosine k-means kept it (its cluster is the dominant
-    /// one or merged into it).
-    pub kept: bool,
-    /// True on the inclined plane, false on the ground.
-    pub inclined: bool,
-}
-
-/// What the estimator saw in its last frame: every segmented plane, the
-/// roles the selection gave them, and the normals the paper method sampled
-/// (kept only with [`Estimator::set_inspect`], which costs a copy of the
-/// normals per frame).
-#[derive(Debug, Clone, Copy)]
-pub struct Inspection<'a> {
-    /// Every plane RANSAC segmented, in the order found.
-    pub planes: &'a [SegmentedPlane],
-    /// Indices into `planes` of the ground's segments (empty without a
-    /// measured ground).
-    pub ground: &'a [usize],
-    /// Index into `planes` of the inclined plane.
-    pub inclined: Option<usize>,
-    /// The paper method's sampled normals, inclined plane first.
-    pub normals: &'a [InspectedNormal],
 }
 
 /// The selection's roles, kept for [`Inspection`].

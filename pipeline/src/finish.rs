@@ -10,7 +10,7 @@ use slope_ipc_types::{EstimateStatus, SlopeMethod};
 use crate::baseline::fit_plane;
 use crate::cloud::angle_between_deg;
 use crate::confidence::{confidence, ChosenPlane};
-use crate::estimator::{Estimate, PlaneEstimate, StageTimings};
+use crate::estimate::{Estimate, PlaneEstimate, StageTimings};
 use crate::plane_fit::Plane;
 use crate::selection::{axis_distance, slope_sign, PlaneSegment, Selection};
 

@@ -11,7 +11,7 @@
 //! | `ransac_planes/` | 2. RANSAC plane segmentation (sample grid, f32 inlier test, hypotheses, regions, labelling) |
 //! | `pass_through.rs` | 3. pass-through filter (at most 10,000 points a plane) |
 //! | `normals/` | 4. PCA normals over K = 100 neighbours (window tables, k-d tree fallback, coarse grid normals) |
-//! | `cosine_kmeans.rs` | 5. cosine k-means, dominant cluster |
+//! | `cosine_kmeans/` | 5. cosine k-means, dominant cluster (farthest-first centres, f32 assignment and cluster sums, Lloyd iterations, merge) |
 //! | `cumulative_angle.rs` | 6. cumulative averaging of the angle |
 //! | `plane_fit.rs` | TLS and least-squares plane fits (baselines) |
 //! | `baseline.rs` | the least-squares and TLS baselines: each chosen plane's pixels fitted by one plane |
@@ -22,6 +22,8 @@
 //! | `tracking.rs` | the slope of the plane ahead followed over frames |
 //! | `message.rs` | an estimate written into the `SlopeEstimate` message |
 //! | `estimator.rs` | orchestration and timings |
+//! | `estimate.rs` | what the estimator returns: the estimate, its planes and timings |
+//! | `inspection.rs` | what the estimator saw in its last frame (planes, roles, sampled normals) |
 //! | `literal/` | the paper's stages as written (k-d tree neighbours, every-point RANSAC, depth pass-through): the `paper-literal` preset |
 
 // `!(x > 0.0)` is how this crate says "not a positive number, NaN
@@ -34,10 +36,12 @@ pub mod confidence;
 pub mod config;
 pub mod cosine_kmeans;
 pub mod cumulative_angle;
+mod estimate;
 pub mod estimator;
 mod finish;
 #[doc(hidden)]
 pub mod fixtures;
+mod inspection;
 pub mod literal;
 pub mod message;
 pub mod normals;

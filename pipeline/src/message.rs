@@ -3,7 +3,7 @@
 
 use slope_ipc_types::SlopeEstimate;
 
-use crate::estimator::Estimate;
+use crate::estimate::Estimate;
 
 impl Estimate {
     /// Fills the estimate's fields of `msg` (not the stamps, frame index or

@@ -1,0 +1,91 @@
+//! What the estimator returns for one frame: the [`Estimate`], its fitted
+//! planes and its per-stage timings. Data only; the stages that fill it
+//! run in `estimator.rs`.
+
+use slope_ipc_types::{EstimateStatus, SlopeMethod};
+
+use crate::tracking::TrackedSlope;
+
+/// The result for one frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Estimate {
+    pub status: EstimateStatus,
+    pub method: SlopeMethod,
+    /// Signed slope, degrees: + uphill, - downhill; NaN unless `Ok`.
+    pub slope_deg: f64,
+    /// Spread of the averaged angle samples, degrees; NaN for the
+    /// baselines (one fit, no spread: a planner gating on the spread must
+    /// not trust them blindly; use the confidence).
+    pub slope_std_deg: f64,
+    /// Angle samples averaged (1 for the baselines).
+    pub samples: u32,
+    /// Distance to the inclined plane along the optical axis, metres.
+    pub distance_m: f64,
+    pub ground: Option<PlaneEstimate>,
+    pub inclined: Option<PlaneEstimate>,
+    /// True when the ground normal is the mount's up vector.
+    pub ground_from_mount: bool,
+    /// How far to trust `slope_deg`, 0..=1 (0 unless `Ok`).
+    pub confidence: f64,
+    /// Why the confidence is below 1: bits of
+    /// `slope_ipc_types::confidence`.
+    pub confidence_reasons: u32,
+    /// The slope followed over frames (`Estimator::estimate_frame`).
+    pub tracked: Option<TrackedSlope>,
+    pub timings: StageTimings,
+}
+
+impl Estimate {
+    /// The estimate of a frame that failed with `status`: no slope, no
+    /// planes, confidence 0.
+    pub(crate) fn failed(status: EstimateStatus, method: SlopeMethod) -> Self {
+        Self {
+            status,
+            method,
+            slope_deg: f64::NAN,
+            slope_std_deg: f64::NAN,
+            samples: 0,
+            distance_m: f64::NAN,
+            ground: None,
+            inclined: None,
+            ground_from_mount: false,
+            confidence: 0.0,
+            confidence_reasons: 0,
+            tracked: None,
+            timings: StageTimings::default(),
+        }
+    }
+}
+
+/// A fitted plane in the estimate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlaneEstimate {
+    /// `[a, b, c, d]`: `a x + b y + c z + d = 0`, `(a, b, c)` a unit normal
+    /// towards the camera side.
+    pub coefficients: [f64; 4],
+    /// RANSAC inliers of the plane (of all its segments for the ground).
+    pub inliers: u32,
+    /// RMS distance of the inliers from the plane, metres.
+    pub rms_m: f64,
+    /// Surface the inliers cover, square metres.
+    pub area_m2: f64,
+}
+
+/// Milliseconds per stage.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct StageTimings {
+    pub total_ms: f64,
+    /// Stage name and milliseconds, in pipeline order.
+    pub stages: Vec<(&'static str, f64)>,
+}
+
+impl StageTimings {
+    /// The time of a stage, 0 when it did not run.
+    pub fn stage_ms(&self, name: &str) -> f64 {
+        self.stages
+            .iter()
+            .filter(|(n, _)| *n == name)
+            .map(|(_, ms)| ms)
+            .sum()
+    }
+}
