@@ -39,7 +39,9 @@ The estimates come from the estimator run here on each frame (--no-estimates lea
 OUT.mcap is written under a temporary name in its directory and renamed into place when finished: \
 a run that fails leaves an existing OUT.mcap as it was. SIGINT or SIGTERM (Ctrl-C) stops the \
 conversion after the frame under way: OUT.mcap then holds the frames converted so far, as a \
-finished file, the run says \"interrupted after N of M frames\" and exits with status 0.",
+finished file, the run says \"interrupted after N of M frames\" and exits with status 0. A second \
+signal ends the run at once with status 130: the temporary file is removed and an existing OUT.mcap \
+stays as it was.",
     after_help = "Examples:
   slope-convert tests/recordings/ramp16 -o ramp16.mcap     # then open ramp16.mcap in Foxglove
   slope-convert REC -o out.mcap --method tls --max-frames 10
