@@ -98,6 +98,21 @@ impl CommonArgs {
     }
 }
 
+/// `Ok` when a program that takes its output as `-o` (or, as before,
+/// without the flag) was given one; else the usage error (status 2) that
+/// says what is missing and how to give it: `missing`, where clap's own
+/// message for a required group would name it `<--output <FILE>|OUTPUT>`.
+pub fn require_output<P: clap::CommandFactory>(
+    flag: Option<&Path>,
+    positional: Option<&Path>,
+    missing: &str,
+) -> Result<(), clap::Error> {
+    match flag.or(positional) {
+        Some(_) => Ok(()),
+        None => Err(P::command().error(clap::error::ErrorKind::MissingRequiredArgument, missing)),
+    }
+}
+
 /// What `--max-frames 0` (and `--count 0`) answers, in every program.
 pub const MAX_FRAMES_ZERO: &str = "must be at least 1 (leave the flag out for no limit)";
 
