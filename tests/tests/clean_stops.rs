@@ -405,3 +405,71 @@ fn a_conversion_stops_cleanly_with_a_valid_mcap_file() {
         assert_eq!(left, [std::ffi::OsString::from("ramp16.mcap")]);
     }
 }
+
+/// The names in `dir`.
+fn names_in(dir: &Path) -> Vec<std::ffi::OsString> {
+    std::fs::read_dir(dir)
+        .expect("the output directory")
+        .map(|entry| entry.expect("an entry").file_name())
+        .collect()
+}
+
+/// slope-convert told twice to stop (a second SIGINT once the first was
+/// taken, while frames are still being converted): status 130 at once,
+/// the previous output as it was, and no temporary `.part` file left
+/// beside it. The second signal may lose the race with the end of the
+/// conversion (status 0 and a finished file, the first signal's clean
+/// stop); then the run is tried again, at most 5 times.
+#[test]
+fn a_second_signal_ends_a_conversion_without_leaving_its_temporary_file() {
+    let dir = recording("ramp16");
+    for _attempt in 0..5 {
+        let out_dir = tempfile::tempdir().expect("temp dir");
+        let out = out_dir.path().join("ramp16.mcap");
+        let previous = b"the previous conversion";
+        std::fs::write(&out, previous).expect("write the previous file");
+        let mut convert = Proc::spawn(
+            "slope-convert",
+            [
+                dir.to_str().expect("utf-8 path"),
+                "-o",
+                out.to_str().expect("utf-8 path"),
+                "-v",
+            ],
+        );
+        let line = convert.wait_stderr("frame converted", deadline(60.0));
+        assert!(line.is_some(), "{}", convert.diagnostics());
+        // The temporary file is there, beside the previous output.
+        assert_eq!(
+            names_in(out_dir.path()).len(),
+            2,
+            "{}",
+            convert.diagnostics()
+        );
+        convert.signal(Signal::SIGINT);
+        let taken = convert.wait_stderr("a second SIGINT/SIGTERM ends", deadline(10.0));
+        assert!(taken.is_some(), "{}", convert.diagnostics());
+        convert.signal(Signal::SIGINT);
+        let status = convert.wait_exit(deadline(10.0));
+        let diagnostics = convert.diagnostics();
+        let status = status.unwrap_or_else(|| panic!("no exit within 10 s\n{diagnostics}"));
+        assert_eq!(
+            names_in(out_dir.path()),
+            [std::ffi::OsString::from("ramp16.mcap")],
+            "{status}\n{diagnostics}"
+        );
+        let bytes = std::fs::read(&out).expect("the output");
+        match status.code() {
+            Some(130) => {
+                assert_eq!(bytes, previous, "{diagnostics}");
+                return;
+            }
+            Some(0) => {
+                let summary = mcap::Summary::read(&bytes).expect("a finished MCAP file");
+                assert!(summary.is_some(), "{diagnostics}");
+            }
+            _ => panic!("exited with {status}\n{diagnostics}"),
+        }
+    }
+    panic!("in 5 runs, the conversion always finished before the second signal");
+}

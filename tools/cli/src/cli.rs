@@ -98,6 +98,21 @@ impl CommonArgs {
     }
 }
 
+/// `Ok` when a program that takes its output as `-o` (or, as before,
+/// without the flag) was given one; else the usage error (status 2) that
+/// says what is missing and how to give it: `missing`, where clap's own
+/// message for a required group would name it `<--output <FILE>|OUTPUT>`.
+pub fn require_output<P: clap::CommandFactory>(
+    flag: Option<&Path>,
+    positional: Option<&Path>,
+    missing: &str,
+) -> Result<(), clap::Error> {
+    match flag.or(positional) {
+        Some(_) => Ok(()),
+        None => Err(P::command().error(clap::error::ErrorKind::MissingRequiredArgument, missing)),
+    }
+}
+
 /// What `--max-frames 0` (and `--count 0`) answers, in every program.
 pub const MAX_FRAMES_ZERO: &str = "must be at least 1 (leave the flag out for no limit)";
 
@@ -132,7 +147,6 @@ pub fn prefix_arg(text: &str) -> Result<String, String> {
     Ok(text.to_string())
 }
 
-/// Installs the SIGINT/SIGTERM handler and returns the flag it sets.
 /// A note in the log when a topic stays silent: after `after` without data,
 /// once, naming the service (its prefix included) and what should publish
 /// on it; again after data came and went.
@@ -207,14 +221,20 @@ pub fn error_report(err: &anyhow::Error) -> String {
     text
 }
 
+/// Installs the SIGINT/SIGTERM handler and returns the flag it sets. The
+/// first signal sets the flag (and says so in the log); a second one ends
+/// the program at once with status 130, after removing the temporary files
+/// of unfinished outputs ([`crate::unfinished_files`]).
 pub fn stop_on_signals() -> anyhow::Result<StopFlag> {
     let stop = StopFlag::new();
     let handler_flag = stop.clone();
     ctrlc::set_handler(move || {
         if handler_flag.is_stopped() {
-            // A second signal while shutting down: the user means it.
-            std::process::exit(130);
+            // A second signal while shutting down: the user means it. No
+            // temporary file of an unfinished output stays behind.
+            crate::unfinished_files::remove_all_and_exit(130);
         }
+        tracing::info!("stopping; a second SIGINT/SIGTERM ends the program at once");
         handler_flag.stop();
     })
     .map_err(|e| anyhow::anyhow!("failed to install the SIGINT/SIGTERM handler: {e}"))?;

@@ -18,15 +18,15 @@ use slope_sensor::recording::{DepthImage, Recording};
 
 use slope_sensor::publish::StopFlag;
 
-use crate::cli::{max_frames_arg, Interruption, LogArgs};
+use crate::cli::{max_frames_arg, require_output, Interruption, LogArgs};
 use crate::estimator::{load_config, method_arg};
 use crate::mcap_export::{McapExporter, McapFrame};
 
 #[derive(Debug, Parser)]
 #[command(
-    group = clap::ArgGroup::new("out").required(true).args(["output", "output_positional"]),
     name = "slope-convert",
-    // The derived usage puts the required output group before RECORDING.
+    // The output is required (checked by `ConvertArgs::parse_checked`, to
+    // say how to give it), which the derived usage cannot know.
     override_usage = "slope-convert [OPTIONS] <RECORDING> --output <FILE>",
     version,
     about = "Convert a recording into an MCAP file (Foxglove, ROS 2 tooling): depth, cloud, estimates",
@@ -39,7 +39,9 @@ The estimates come from the estimator run here on each frame (--no-estimates lea
 OUT.mcap is written under a temporary name in its directory and renamed into place when finished: \
 a run that fails leaves an existing OUT.mcap as it was. SIGINT or SIGTERM (Ctrl-C) stops the \
 conversion after the frame under way: OUT.mcap then holds the frames converted so far, as a \
-finished file, the run says \"interrupted after N of M frames\" and exits with status 0.",
+finished file, the run says \"interrupted after N of M frames\" and exits with status 0. A second \
+signal ends the run at once with status 130: the temporary file is removed and an existing OUT.mcap \
+stays as it was.",
     after_help = "Examples:
   slope-convert tests/recordings/ramp16 -o ramp16.mcap     # then open ramp16.mcap in Foxglove
   slope-convert REC -o out.mcap --method tls --max-frames 10
@@ -77,12 +79,37 @@ pub struct ConvertArgs {
     pub log: LogArgs,
 }
 
+/// What `slope-convert` without an output says (a usage error, status 2).
+pub const OUTPUT_MISSING: &str = "an output file is required: give it as -o FILE";
+
 impl ConvertArgs {
+    /// The command line, or the usage error that ends the program: clap's,
+    /// or [`OUTPUT_MISSING`].
+    pub fn parse_checked() -> Self {
+        Self::try_parse_checked_from(std::env::args_os()).unwrap_or_else(|err| err.exit())
+    }
+
+    /// [`Parser::try_parse_from`], and [`OUTPUT_MISSING`] when neither
+    /// `-o FILE` nor FILE was given.
+    pub fn try_parse_checked_from<I, T>(args: I) -> Result<Self, clap::Error>
+    where
+        I: IntoIterator<Item = T>,
+        T: Into<std::ffi::OsString> + Clone,
+    {
+        let args = Self::try_parse_from(args)?;
+        require_output::<Self>(
+            args.output.as_deref(),
+            args.output_positional.as_deref(),
+            OUTPUT_MISSING,
+        )?;
+        Ok(args)
+    }
+
     /// `-o FILE` (or FILE without the flag).
     pub fn output(&self) -> &Path {
         match (&self.output, &self.output_positional) {
             (Some(path), _) | (None, Some(path)) => path,
-            // Unreachable: the group `out` requires one of the two.
+            // Only without [`Self::try_parse_checked_from`]: no path.
             (None, None) => Path::new(""),
         }
     }

@@ -25,3 +25,4 @@ pub mod render;
 pub mod replay;
 pub mod service_manager;
 pub mod text;
+pub mod unfinished_files;

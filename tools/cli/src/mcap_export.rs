@@ -22,6 +22,7 @@ use serde_json::json;
 use slope_ipc_types::{CloudPoint, SlopeEstimate};
 
 use crate::echo::EstimateJson;
+use crate::unfinished_files::UnfinishedFile;
 
 pub const DEPTH_TOPIC: &str = "/slope/depth";
 pub const CLOUD_TOPIC: &str = "/slope/cloud";
@@ -133,7 +134,15 @@ pub struct McapExporter {
     path: String,
     /// With [`McapExporter::create_replacing`]: the temporary file being
     /// written and the path it becomes on [`McapExporter::finish`].
-    pending: Option<(tempfile::TempPath, PathBuf)>,
+    pending: Option<Replacement>,
+}
+
+/// A temporary file that becomes `path` once finished; registered so that
+/// a second signal removes it ([`crate::unfinished_files`]).
+struct Replacement {
+    temp: tempfile::TempPath,
+    path: PathBuf,
+    unfinished: UnfinishedFile,
 }
 
 impl McapExporter {
@@ -170,22 +179,24 @@ impl McapExporter {
         builder.prefix(&prefix).suffix(".part");
         #[cfg(unix)]
         builder.permissions(permissions);
-        let temp = builder.tempfile_in(dir).with_context(|| {
-            format!(
-                "cannot create a temporary file for {name} in {}",
-                dir.display()
-            )
-        })?;
-        let (file, temp_path) = temp.into_parts();
-        Self::with_file(file, name, Some((temp_path, path.to_path_buf())))
+        let (temp, unfinished) =
+            UnfinishedFile::create(|| builder.tempfile_in(dir)).with_context(|| {
+                format!(
+                    "cannot create a temporary file for {name} in {}",
+                    dir.display()
+                )
+            })?;
+        let (file, temp) = temp.into_parts();
+        let replacement = Replacement {
+            temp,
+            path: path.to_path_buf(),
+            unfinished,
+        };
+        Self::with_file(file, name, Some(replacement))
     }
 
     /// Writes the header and the three channels into `file`.
-    fn with_file(
-        file: File,
-        name: String,
-        pending: Option<(tempfile::TempPath, PathBuf)>,
-    ) -> anyhow::Result<Self> {
+    fn with_file(file: File, name: String, pending: Option<Replacement>) -> anyhow::Result<Self> {
         let mut writer = mcap::WriteOptions::new()
             .compression(None)
             .create(BufWriter::new(file))
@@ -311,10 +322,16 @@ impl McapExporter {
             .into_inner()
             .map_err(std::io::IntoInnerError::into_error)
             .with_context(|| format!("cannot finish {}", self.path))?;
-        if let Some((temp, path)) = self.pending {
+        if let Some(Replacement {
+            temp,
+            path,
+            unfinished,
+        }) = self.pending
+        {
             file.sync_all()
                 .with_context(|| format!("cannot finish {}", self.path))?;
-            temp.persist(&path)
+            unfinished
+                .finish_with(|| temp.persist(&path))
                 .map_err(|e| e.error)
                 .with_context(|| format!("cannot rename the finished file to {}", self.path))?;
         }

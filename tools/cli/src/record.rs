@@ -24,7 +24,7 @@ use slope_sensor::recording::{
 };
 use slope_sensor::source::{FrameSource, SourceFrame, SourceInfo};
 
-use crate::cli::{max_frames_arg, node_name, CommonArgs};
+use crate::cli::{max_frames_arg, node_name, require_output, CommonArgs};
 use crate::mcap_export::{McapExporter, McapFrame};
 use crate::mount_args::MountArgs;
 use crate::replay::positive_f64;
@@ -78,8 +78,10 @@ impl From<Compression> for PngCompression {
 
 #[derive(Debug, Parser)]
 #[command(
-    group = clap::ArgGroup::new("out").required(true).args(["output", "output_positional"]),
     name = "slope-record",
+    // The output is required (checked by `RecordArgs::parse_checked`, to
+    // say how to give it), which the derived usage cannot know.
+    override_usage = "slope-record [OPTIONS] --output <PATH>",
     version,
     about = "Record depth (and colour) frames into a recording that slope-replay can play",
     long_about = "Writes the -o directory in the recording format (recording.toml, frames.csv, depth/*.png, \
@@ -158,12 +160,39 @@ pub struct RecordArgs {
     pub common: CommonArgs,
 }
 
+/// What `slope-record` without an output says (a usage error, status 2).
+pub const OUTPUT_MISSING: &str =
+    "an output is required: give it as -o DIR (a recording directory), \
+     or as -o FILE with --format mcap";
+
 impl RecordArgs {
+    /// The command line, or the usage error that ends the program: clap's,
+    /// or [`OUTPUT_MISSING`].
+    pub fn parse_checked() -> Self {
+        Self::try_parse_checked_from(std::env::args_os()).unwrap_or_else(|err| err.exit())
+    }
+
+    /// [`Parser::try_parse_from`], and [`OUTPUT_MISSING`] when neither
+    /// `-o PATH` nor PATH was given.
+    pub fn try_parse_checked_from<I, T>(args: I) -> Result<Self, clap::Error>
+    where
+        I: IntoIterator<Item = T>,
+        T: Into<std::ffi::OsString> + Clone,
+    {
+        let args = Self::try_parse_from(args)?;
+        require_output::<Self>(
+            args.output.as_deref(),
+            args.output_positional.as_deref(),
+            OUTPUT_MISSING,
+        )?;
+        Ok(args)
+    }
+
     /// `-o PATH` (or PATH without the flag).
     pub fn out_dir(&self) -> &Path {
         match (&self.output, &self.output_positional) {
             (Some(path), _) | (None, Some(path)) => path,
-            // Unreachable: the group `out` requires one of the two.
+            // Only without [`Self::try_parse_checked_from`]: no path.
             (None, None) => Path::new(""),
         }
     }
@@ -853,7 +882,9 @@ mod tests {
     #[test]
     fn zero_frames_is_refused_and_the_pipeline_is_parsed_early() {
         let parse = |args: &[&str]| {
-            RecordArgs::try_parse_from(std::iter::once("slope-record").chain(args.iter().copied()))
+            RecordArgs::try_parse_checked_from(
+                std::iter::once("slope-record").chain(args.iter().copied()),
+            )
         };
         assert!(parse(&["out", "--max-frames", "0"]).is_err());
         assert!(parse(&["out", "--max-frames", "1"]).is_ok());

@@ -94,6 +94,35 @@ fn help_texts_match_what_the_programs_do() {
     assert!(eval.contains("missing keys keep our"), "{eval}");
 }
 
+/// A program whose output is `-o` (or, as before, given without the flag)
+/// says, when it has none, what is missing and how to give it: a usage
+/// error (status 2), not clap's name of its argument group.
+#[test]
+fn a_missing_output_says_how_to_give_it() {
+    for (bin, args, message) in [
+        (
+            env!("CARGO_BIN_EXE_slope-convert"),
+            &["REC"][..],
+            "an output file is required: give it as -o FILE",
+        ),
+        (
+            env!("CARGO_BIN_EXE_slope-record"),
+            &[][..],
+            "an output is required: give it as -o DIR (a recording directory), \
+             or as -o FILE with --format mcap",
+        ),
+    ] {
+        let output = Command::new(bin).args(args).output().expect("run");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "{bin}: {stderr}");
+        assert!(
+            stderr.starts_with(&format!("error: {message}\n")),
+            "{bin}: {stderr}"
+        );
+        assert!(!stderr.contains("OUTPUT>"), "{bin}: {stderr}");
+    }
+}
+
 #[test]
 fn unknown_flags_fail_with_a_message() {
     for (name, bin) in BINARIES {

@@ -12,7 +12,7 @@ use slope_sensor::publish::StopFlag;
 use slope_sensor::recording::PngCompression;
 
 use crate::recording::{write_recording_with, RecordingSummary, WriteOptions};
-use crate::scene::{load_scene_file, Ramp, Scene, SlopeDirection};
+use crate::scene::{self, load_scene_file, Ramp, Scene, SlopeDirection, ValueRule};
 use crate::sensor_model::SensorModel;
 
 const EXAMPLES: &str = "\
@@ -67,43 +67,43 @@ pub struct Args {
     pub descending: bool,
 
     /// Forward distance from the camera to the ramp's foot line, metres.
-    #[arg(long, value_name = "M")]
+    #[arg(long, value_name = "M", value_parser = distance_arg)]
     pub distance: Option<f64>,
 
     /// Width of the ramp across the slope, metres ("inf" for unbounded).
-    #[arg(long, value_name = "M")]
+    #[arg(long, value_name = "M", value_parser = width_arg)]
     pub width: Option<f64>,
 
     /// Length of the ramp along the slope, metres ("inf" for unbounded).
-    #[arg(long, value_name = "M")]
+    #[arg(long, value_name = "M", value_parser = length_arg)]
     pub length: Option<f64>,
 
     /// Flat landing on top of an ascending ramp, metres (0 = none).
-    #[arg(long, value_name = "M")]
+    #[arg(long, value_name = "M", value_parser = landing_arg)]
     pub landing: Option<f64>,
 
     /// Ramp seen at a yaw angle: positive turns its uphill direction left, degrees.
-    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true, value_parser = yaw_arg)]
     pub yaw: Option<f64>,
 
     /// Camera's optical centre above the ground, metres.
-    #[arg(long, value_name = "M")]
+    #[arg(long, value_name = "M", value_parser = height_arg)]
     pub height: Option<f64>,
 
     /// Camera pitch, degrees; negative looks down.
-    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true, value_parser = pitch_arg)]
     pub pitch: Option<f64>,
 
     /// Camera roll, degrees; positive dips the image's right side.
-    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true, value_parser = roll_arg)]
     pub roll: Option<f64>,
 
     /// Forward speed of the camera between frames, metres per second.
-    #[arg(long, value_name = "M/S", allow_hyphen_values = true)]
+    #[arg(long, value_name = "M/S", allow_hyphen_values = true, value_parser = speed_arg)]
     pub speed: Option<f64>,
 
     /// Add two side walls 1 m high at x = -M and x = +M, from 0 to 6 m ahead.
-    #[arg(long, value_name = "M")]
+    #[arg(long, value_name = "M", value_parser = side_walls_arg)]
     pub side_walls: Option<f64>,
 
     /// Number of frames (30 Hz).
@@ -166,7 +166,9 @@ impl Args {
     }
 
     /// The scene and sensor model these arguments describe: the default
-    /// ramp scene (or the scene file), overridden by the flags given.
+    /// ramp scene (or the scene file), overridden by the flags given. The
+    /// flags' values were checked when parsed (an error names the flag); a
+    /// scene file's are checked when loaded (an error names the key).
     pub fn scene_and_model(&self) -> anyhow::Result<(Scene, SensorModel)> {
         let (mut scene, file_model) = match &self.scene {
             Some(path) => {
@@ -180,7 +182,15 @@ impl Args {
         if self.clean {
             model = SensorModel::clean();
         }
+        self.apply_camera_and_wall_flags(&mut scene);
+        self.apply_ramp_flags(&mut scene)?;
+        scene.validate().context("invalid scene")?;
+        model.validate().context("invalid sensor model")?;
+        Ok((scene, model))
+    }
 
+    /// `--height`, `--pitch`, `--roll`, `--speed` and `--side-walls`.
+    fn apply_camera_and_wall_flags(&self, scene: &mut Scene) {
         if let Some(h) = self.height {
             scene.mount.height_m = h;
         }
@@ -201,7 +211,10 @@ impl Args {
                 });
             }
         }
+    }
 
+    /// `--slope`, `--descending` and the ramp's other flags.
+    fn apply_ramp_flags(&self, scene: &mut Scene) -> anyhow::Result<()> {
         let ramp_flags = self.distance.is_some()
             || self.width.is_some()
             || self.length.is_some()
@@ -214,33 +227,40 @@ impl Args {
                 "--slope 0 removes the ramp; drop the ramp flags"
             );
             scene.ramp = None;
-        } else if self.slope.is_some() || ramp_flags {
-            let ramp = scene.ramp.get_or_insert_with(Ramp::default);
-            if let Some(s) = self.slope {
-                ramp.slope_deg = s.abs();
-            }
-            if self.descending || self.slope.is_some_and(|s| s < 0.0) {
-                ramp.direction = SlopeDirection::Descending;
-            }
-            if let Some(d) = self.distance {
-                ramp.distance_m = d;
-            }
-            if let Some(w) = self.width {
-                ramp.width_m = w;
-            }
-            if let Some(l) = self.length {
-                ramp.length_m = l;
-            }
-            if let Some(l) = self.landing {
-                ramp.landing_m = l;
-            }
-            if let Some(y) = self.yaw {
-                ramp.yaw_deg = y;
-            }
+            return Ok(());
         }
-        scene.validate().context("invalid scene")?;
-        model.validate().context("invalid sensor model")?;
-        Ok((scene, model))
+        if self.slope.is_none() && !ramp_flags {
+            return Ok(());
+        }
+        let ramp = scene.ramp.get_or_insert_with(Ramp::default);
+        if let Some(s) = self.slope {
+            ramp.slope_deg = s.abs();
+        }
+        if self.descending || self.slope.is_some_and(|s| s < 0.0) {
+            ramp.direction = SlopeDirection::Descending;
+        }
+        // The one check that spans two values: name the flag given.
+        anyhow::ensure!(
+            !(self.descending && ramp.slope_deg >= 90.0),
+            "--descending: a descending slope must be below 90° (the ramp's is {}°)",
+            ramp.slope_deg
+        );
+        if let Some(d) = self.distance {
+            ramp.distance_m = d;
+        }
+        if let Some(w) = self.width {
+            ramp.width_m = w;
+        }
+        if let Some(l) = self.length {
+            ramp.length_m = l;
+        }
+        if let Some(l) = self.landing {
+            ramp.landing_m = l;
+        }
+        if let Some(y) = self.yaw {
+            ramp.yaw_deg = y;
+        }
+        Ok(())
     }
 }
 
@@ -313,6 +333,61 @@ fn slope_arg(text: &str) -> Result<f64, String> {
     } else {
         Err(SLOPE_RANGE.to_string())
     }
+}
+
+/// A flag that sets a scene value: a number that `rule` accepts, else
+/// the rule's reason (which clap prints after the flag and the value typed,
+/// where a scene file's error names the key).
+fn scene_value_arg(text: &str, rule: ValueRule) -> Result<f64, String> {
+    let value: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{text}' is not a number"))?;
+    if (rule.accepts)(value) {
+        Ok(value)
+    } else {
+        Err(rule.reason.to_string())
+    }
+}
+
+fn distance_arg(text: &str) -> Result<f64, String> {
+    scene_value_arg(text, scene::RAMP_DISTANCE)
+}
+
+fn width_arg(text: &str) -> Result<f64, String> {
+    scene_value_arg(text, scene::RAMP_WIDTH)
+}
+
+fn length_arg(text: &str) -> Result<f64, String> {
+    scene_value_arg(text, scene::RAMP_LENGTH)
+}
+
+fn landing_arg(text: &str) -> Result<f64, String> {
+    scene_value_arg(text, scene::RAMP_LANDING)
+}
+
+fn yaw_arg(text: &str) -> Result<f64, String> {
+    scene_value_arg(text, scene::RAMP_YAW)
+}
+
+fn height_arg(text: &str) -> Result<f64, String> {
+    scene_value_arg(text, scene::MOUNT_HEIGHT)
+}
+
+fn pitch_arg(text: &str) -> Result<f64, String> {
+    scene_value_arg(text, scene::MOUNT_PITCH)
+}
+
+fn roll_arg(text: &str) -> Result<f64, String> {
+    scene_value_arg(text, scene::MOUNT_ROLL)
+}
+
+fn speed_arg(text: &str) -> Result<f64, String> {
+    scene_value_arg(text, scene::MOTION_SPEED)
+}
+
+fn side_walls_arg(text: &str) -> Result<f64, String> {
+    scene_value_arg(text, scene::WALL_X)
 }
 
 #[cfg(test)]

@@ -250,26 +250,10 @@ impl Scene {
             check(v.is_finite(), key, "must be a finite number")?;
         }
         let m = &self.mount;
-        check(
-            m.height_m.is_finite() && m.height_m > 0.0,
-            "mount.height_m",
-            "must be > 0",
-        )?;
-        check(
-            m.pitch_deg.is_finite() && m.pitch_deg.abs() < 90.0,
-            "mount.pitch_deg",
-            "must lie in (-90, 90)",
-        )?;
-        check(
-            m.roll_deg.is_finite() && m.roll_deg.abs() < 90.0,
-            "mount.roll_deg",
-            "must lie in (-90, 90)",
-        )?;
-        check(
-            self.motion.speed_mps.is_finite() && self.motion.speed_mps.abs() <= 10.0,
-            "motion.speed_mps",
-            "must lie in [-10, 10]",
-        )?;
+        MOUNT_HEIGHT.check(m.height_m)?;
+        MOUNT_PITCH.check(m.pitch_deg)?;
+        MOUNT_ROLL.check(m.roll_deg)?;
+        MOTION_SPEED.check(self.motion.speed_mps)?;
         if let Some(r) = &self.ramp {
             check(
                 r.slope_deg.is_finite() && r.slope_deg > 0.0 && r.slope_deg <= 90.0,
@@ -281,31 +265,11 @@ impl Scene {
                 "ramp.slope_deg",
                 "a descending slope must be below 90°",
             )?;
-            check(
-                r.distance_m.is_finite() && r.distance_m > 0.0,
-                "ramp.distance_m",
-                "must be > 0 (the foot line lies ahead of the camera)",
-            )?;
-            check(
-                !r.width_m.is_nan() && r.width_m > 0.0,
-                "ramp.width_m",
-                "must be > 0 or inf",
-            )?;
-            check(
-                !r.length_m.is_nan() && r.length_m > 0.0,
-                "ramp.length_m",
-                "must be > 0 or inf",
-            )?;
-            check(
-                r.landing_m.is_finite() && r.landing_m >= 0.0,
-                "ramp.landing_m",
-                "must be >= 0",
-            )?;
-            check(
-                r.yaw_deg.is_finite() && r.yaw_deg.abs() < 90.0,
-                "ramp.yaw_deg",
-                "must lie in (-90, 90)",
-            )?;
+            RAMP_DISTANCE.check(r.distance_m)?;
+            RAMP_WIDTH.check(r.width_m)?;
+            RAMP_LENGTH.check(r.length_m)?;
+            RAMP_LANDING.check(r.landing_m)?;
+            RAMP_YAW.check(r.yaw_deg)?;
             check(
                 r.offset_m.is_finite(),
                 "ramp.offset_m",
@@ -314,11 +278,7 @@ impl Scene {
         }
         for (i, w) in self.walls.iter().enumerate() {
             let key = |k: &str| format!("walls[{i}].{k}");
-            check(
-                w.x_m.is_finite() && w.x_m != 0.0,
-                &key("x_m"),
-                "must be finite and non-zero",
-            )?;
+            check((WALL_X.accepts)(w.x_m), &key("x_m"), WALL_X.reason)?;
             check(
                 w.from_m.is_finite() && w.to_m.is_finite(),
                 &key("from_m"),
@@ -373,6 +333,73 @@ impl Scene {
         Ok(())
     }
 }
+
+/// The range of a scene value that a `slope-synth` flag can also set: one
+/// rule for both, so that [`Scene::validate`] names the key (`key`) and
+/// the flag's parser names the flag, with the same `reason`.
+#[derive(Debug, Clone, Copy)]
+pub struct ValueRule {
+    /// The key in a scene file (`[walls]`: of every wall).
+    pub key: &'static str,
+    pub accepts: fn(f64) -> bool,
+    /// What the value must be ("must lie in (-90, 90)").
+    pub reason: &'static str,
+}
+
+impl ValueRule {
+    /// [`SceneError::InvalidKey`] naming [`Self::key`] unless `value` is accepted.
+    pub fn check(&self, value: f64) -> Result<(), SceneError> {
+        check((self.accepts)(value), self.key, self.reason)
+    }
+}
+
+pub const MOUNT_HEIGHT: ValueRule = ValueRule {
+    key: "mount.height_m",
+    accepts: |v| v.is_finite() && v > 0.0,
+    reason: "must be > 0",
+};
+pub const MOUNT_PITCH: ValueRule = ValueRule {
+    key: "mount.pitch_deg",
+    accepts: |v| v.is_finite() && v.abs() < 90.0,
+    reason: "must lie in (-90, 90)",
+};
+pub const MOUNT_ROLL: ValueRule = ValueRule {
+    key: "mount.roll_deg",
+    ..MOUNT_PITCH
+};
+pub const MOTION_SPEED: ValueRule = ValueRule {
+    key: "motion.speed_mps",
+    accepts: |v| v.is_finite() && v.abs() <= 10.0,
+    reason: "must lie in [-10, 10]",
+};
+pub const RAMP_DISTANCE: ValueRule = ValueRule {
+    key: "ramp.distance_m",
+    accepts: |v| v.is_finite() && v > 0.0,
+    reason: "must be > 0 (the foot line lies ahead of the camera)",
+};
+pub const RAMP_WIDTH: ValueRule = ValueRule {
+    key: "ramp.width_m",
+    accepts: |v| !v.is_nan() && v > 0.0,
+    reason: "must be > 0 or inf",
+};
+pub const RAMP_LENGTH: ValueRule = ValueRule {
+    key: "ramp.length_m",
+    ..RAMP_WIDTH
+};
+pub const RAMP_LANDING: ValueRule = ValueRule {
+    key: "ramp.landing_m",
+    accepts: |v| v.is_finite() && v >= 0.0,
+    reason: "must be >= 0",
+};
+pub const RAMP_YAW: ValueRule = ValueRule {
+    key: "ramp.yaw_deg",
+    ..MOUNT_PITCH
+};
+pub const WALL_X: ValueRule = ValueRule {
+    key: "walls.x_m",
+    accepts: |v| v.is_finite() && v != 0.0,
+    reason: "must be finite and non-zero",
+};
 
 fn check(ok: bool, key: &str, reason: &str) -> Result<(), SceneError> {
     if ok {

@@ -89,3 +89,65 @@ fn failures_exit_non_zero_and_say_why() {
         "{err}"
     );
 }
+
+/// A value out of range is named as the user gave it: by its flag and the
+/// value typed when it came from a flag (a usage error, status 2, nothing
+/// written), by its key and the file when it came from a scene file.
+#[test]
+fn out_of_range_values_are_named_by_flag_or_by_scene_key() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("new");
+    for (flag, value, key) in [
+        ("--pitch", "95", "mount.pitch_deg"),
+        ("--roll", "-90", "mount.roll_deg"),
+        ("--height", "0", "mount.height_m"),
+        ("--speed", "20", "motion.speed_mps"),
+        ("--distance", "0", "ramp.distance_m"),
+        ("--width", "nan", "ramp.width_m"),
+        ("--length", "0", "ramp.length_m"),
+        ("--landing", "inf", "ramp.landing_m"),
+        ("--yaw", "90", "ramp.yaw_deg"),
+        ("--side-walls", "0", "x_m"),
+    ] {
+        let run = synth()
+            .args([flag, value, "-o"])
+            .arg(&out)
+            .output()
+            .expect("runs");
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(2), "{flag} {value}: {err}");
+        assert!(
+            err.contains(&format!("'{value}' for '{flag} <")),
+            "{flag} {value}: {err}"
+        );
+        assert!(!err.contains(key), "{flag} {value}: {err}");
+        assert!(!out.exists(), "{flag} {value} wrote {}", out.display());
+    }
+    // A descending wall: the flag that made it one is named.
+    let run = synth()
+        .args(["--slope", "90", "--descending", "-o"])
+        .arg(&out)
+        .output()
+        .expect("runs");
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success(), "{err}");
+    assert!(err.contains("--descending: a descending slope"), "{err}");
+    assert!(!err.contains("ramp.slope_deg"), "{err}");
+    // The same value from a scene file: its key and the file.
+    let scene = dir.path().join("steep.toml");
+    std::fs::write(&scene, "[mount]\npitch_deg = 95.0\n").expect("writable");
+    let run = synth()
+        .arg("--scene")
+        .arg(&scene)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .expect("runs");
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success(), "{err}");
+    assert!(
+        err.contains("steep.toml: key `mount.pitch_deg`: must lie in (-90, 90)"),
+        "{err}"
+    );
+    assert!(!err.contains("--pitch"), "{err}");
+}

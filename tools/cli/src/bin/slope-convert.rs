@@ -2,12 +2,11 @@
 
 use std::process::ExitCode;
 
-use clap::Parser;
 use slope_tools::cli::{exit_status, stop_on_signals};
 use slope_tools::convert::{run, ConvertArgs};
 
 fn main() -> ExitCode {
-    let args = ConvertArgs::parse();
+    let args = ConvertArgs::parse_checked();
     args.init_logging();
     exit_status(stop_on_signals().and_then(|stop| run(&args, &stop).map(drop)))
 }

@@ -3,12 +3,11 @@
 
 use std::process::ExitCode;
 
-use clap::Parser;
 use slope_tools::cli::{exit_status, stop_on_signals};
 use slope_tools::record::{run, RecordArgs};
 
 fn main() -> ExitCode {
-    let args = RecordArgs::parse();
+    let args = RecordArgs::parse_checked();
     args.common.init_logging();
     exit_status(stop_on_signals().and_then(|stop| run(&args, &stop).map(drop)))
 }
