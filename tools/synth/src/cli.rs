@@ -67,19 +67,19 @@ pub struct Args {
     pub descending: bool,
 
     /// Forward distance from the camera to the ramp's foot line, metres.
-    #[arg(long, value_name = "M", value_parser = distance_arg)]
+    #[arg(long, value_name = "M", allow_hyphen_values = true, value_parser = distance_arg)]
     pub distance: Option<f64>,
 
     /// Width of the ramp across the slope, metres ("inf" for unbounded).
-    #[arg(long, value_name = "M", value_parser = width_arg)]
+    #[arg(long, value_name = "M", allow_hyphen_values = true, value_parser = width_arg)]
     pub width: Option<f64>,
 
     /// Length of the ramp along the slope, metres ("inf" for unbounded).
-    #[arg(long, value_name = "M", value_parser = length_arg)]
+    #[arg(long, value_name = "M", allow_hyphen_values = true, value_parser = length_arg)]
     pub length: Option<f64>,
 
     /// Flat landing on top of an ascending ramp, metres (0 = none).
-    #[arg(long, value_name = "M", value_parser = landing_arg)]
+    #[arg(long, value_name = "M", allow_hyphen_values = true, value_parser = landing_arg)]
     pub landing: Option<f64>,
 
     /// Ramp seen at a yaw angle: positive turns its uphill direction left, degrees.
@@ -87,7 +87,7 @@ pub struct Args {
     pub yaw: Option<f64>,
 
     /// Camera's optical centre above the ground, metres.
-    #[arg(long, value_name = "M", value_parser = height_arg)]
+    #[arg(long, value_name = "M", allow_hyphen_values = true, value_parser = height_arg)]
     pub height: Option<f64>,
 
     /// Camera pitch, degrees; negative looks down.
@@ -103,7 +103,7 @@ pub struct Args {
     pub speed: Option<f64>,
 
     /// Add two side walls 1 m high at x = -M and x = +M, from 0 to 6 m ahead.
-    #[arg(long, value_name = "M", value_parser = side_walls_arg)]
+    #[arg(long, value_name = "M", allow_hyphen_values = true, value_parser = side_walls_arg)]
     pub side_walls: Option<f64>,
 
     /// Number of frames (30 Hz).

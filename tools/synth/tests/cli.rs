@@ -108,6 +108,12 @@ fn out_of_range_values_are_named_by_flag_or_by_scene_key() {
         ("--landing", "inf", "ramp.landing_m"),
         ("--yaw", "90", "ramp.yaw_deg"),
         ("--side-walls", "0", "x_m"),
+        // Negative lengths are refused by their range, not taken for flags.
+        ("--height", "-1", "mount.height_m"),
+        ("--distance", "-1", "ramp.distance_m"),
+        ("--width", "-2", "ramp.width_m"),
+        ("--length", "-2", "ramp.length_m"),
+        ("--landing", "-0.5", "ramp.landing_m"),
     ] {
         let run = synth()
             .args([flag, value, "-o"])
