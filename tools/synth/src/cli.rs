@@ -106,8 +106,8 @@ pub struct Args {
     #[arg(long, value_name = "M", allow_hyphen_values = true, value_parser = side_walls_arg)]
     pub side_walls: Option<f64>,
 
-    /// Number of frames (30 Hz).
-    #[arg(long, default_value_t = 30)]
+    /// Number of frames (30 Hz), at least 1.
+    #[arg(long, default_value_t = 30, value_parser = frames_arg)]
     pub frames: u64,
 
     /// Seed of the random noise: the same seed gives the same bytes.
@@ -332,6 +332,15 @@ fn slope_arg(text: &str) -> Result<f64, String> {
         Ok(value)
     } else {
         Err(SLOPE_RANGE.to_string())
+    }
+}
+
+/// `--frames`: a whole number, at least 1.
+fn frames_arg(text: &str) -> Result<u64, String> {
+    match text.trim().parse::<u64>() {
+        Ok(0) => Err("must be at least 1".to_string()),
+        Ok(n) => Ok(n),
+        Err(_) => Err(format!("'{text}' is not a whole number")),
     }
 }
 

@@ -129,6 +129,19 @@ fn out_of_range_values_are_named_by_flag_or_by_scene_key() {
         assert!(!err.contains(key), "{flag} {value}: {err}");
         assert!(!out.exists(), "{flag} {value} wrote {}", out.display());
     }
+    // No frames: a usage error, before anything is written.
+    let run = synth()
+        .args(["--frames", "0", "-o"])
+        .arg(&out)
+        .output()
+        .expect("runs");
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("'0' for '--frames <FRAMES>': must be at least 1"),
+        "{err}"
+    );
+    assert!(!out.exists());
     // A descending wall: the flag that made it one is named.
     let run = synth()
         .args(["--slope", "90", "--descending", "-o"])
