@@ -12,14 +12,15 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use clap::Parser;
-use slope_ipc_types::{CloudPoint, SlopeEstimate};
+use slope_ipc_types::{CloudPoint, SlopeEstimate, DEFAULT_MAX_CLOUD_POINTS};
 use slope_pipeline::{CloudView, Estimator, FrameInfo};
-use slope_sensor::recording::{DepthImage, Recording};
+use slope_sensor::recording::DepthImage;
 
 use slope_sensor::publish::StopFlag;
 
 use crate::cli::{max_frames_arg, require_output, Interruption, LogArgs};
 use crate::estimator::{load_config, method_arg};
+use crate::eval::open_recording;
 use crate::mcap_export::{McapExporter, McapFrame};
 
 #[derive(Debug, Parser)]
@@ -74,6 +75,11 @@ pub struct ConvertArgs {
     /// Leave the estimates out (depth and cloud only).
     #[arg(long)]
     pub no_estimates: bool,
+
+    /// Largest frame (width x height of [depth]) to accept; a recording
+    /// with a larger one is refused before any cloud is allocated.
+    #[arg(long, default_value_t = DEFAULT_MAX_CLOUD_POINTS)]
+    pub max_points: usize,
 
     #[command(flatten)]
     pub log: LogArgs,
@@ -133,7 +139,7 @@ pub struct ConvertStats {
 /// set, the run ends after the frame under way and finishes the file with
 /// the frames converted so far.
 pub fn run(args: &ConvertArgs, stop: &StopFlag) -> anyhow::Result<ConvertStats> {
-    let recording = Recording::open(&args.recording)
+    let recording = open_recording(&args.recording, args.max_points)
         .with_context(|| format!("cannot convert {}", args.recording.display()))?;
     let config =
         load_config(args.config.as_ref(), args.method)?.for_sensor(&recording.meta().sensor);

@@ -34,7 +34,7 @@ use clap::Parser;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
-use slope_ipc_types::{CloudPoint, EstimateStatus, SlopeMethod};
+use slope_ipc_types::{CloudPoint, EstimateStatus, SlopeMethod, DEFAULT_MAX_CLOUD_POINTS};
 use slope_pipeline::tracking::TrackedSlope;
 use slope_pipeline::{
     CloudView, Estimate, Estimator, EstimatorConfig, FrameInfo, PlaneEstimate, StageTimings,
@@ -152,6 +152,11 @@ pub struct EvalArgs {
     /// the tracked slope and the truth, and the time per frame.
     #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
+
+    /// Largest frame (width x height of [depth]) to accept; a recording
+    /// with a larger one is refused before any cloud is allocated.
+    #[arg(long, default_value_t = DEFAULT_MAX_CLOUD_POINTS)]
+    pub max_points: usize,
 
     /// -v/-q (-q also hides the progress bar).
     #[command(flatten)]
@@ -560,14 +565,10 @@ pub fn run(args: &EvalArgs, stop: &StopFlag) -> anyhow::Result<EvalOutcome> {
             tracing::warn!(path = %path.display(), "skipping a file: a recording is a directory");
             continue;
         }
-        match Recording::open(path) {
+        match open_recording(path, args.max_points) {
             Ok(recording) => opened.push((path, recording)),
             Err(err) => {
-                let message = format!(
-                    "cannot evaluate {}: {}",
-                    path.display(),
-                    slope_sensor::error_chain::ErrorChain(&err)
-                );
+                let message = format!("cannot evaluate {}: {err:#}", path.display());
                 // Reported once, with the others, when the run ends.
                 outcome.failures.push(message);
             }
@@ -686,6 +687,17 @@ pub fn run(args: &EvalArgs, stop: &StopFlag) -> anyhow::Result<EvalOutcome> {
         outcome.interrupted = Some(interruption);
     }
     Ok(outcome)
+}
+
+/// Opens the recording in `path` to read its frames in this process
+/// (`slope-eval`, `slope-convert`): refuses a `[depth]` size of more than
+/// `max_points` points (`--max-points`) before any cloud is allocated.
+pub fn open_recording(path: &Path, max_points: usize) -> anyhow::Result<Recording> {
+    let recording = Recording::open(path)?;
+    recording
+        .check_points(max_points)
+        .map_err(|err| anyhow::anyhow!("{err} (--max-points)"))?;
+    Ok(recording)
 }
 
 /// Writes one line to stdout without disturbing the progress bar. `false`

@@ -157,6 +157,55 @@ fn every_nth_frame_gets_an_overlay_and_a_ply_that_match_the_report() {
     assert!(blue > 200, "{blue} pixels of the paper method's colour");
 }
 
+/// `slope-convert` and its status and stderr.
+fn convert(args: &[&str]) -> (Option<i32>, String) {
+    let out = Command::new(CONVERT)
+        .args(args)
+        .env_remove("RUST_LOG")
+        .output()
+        .expect("run");
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// A `[depth]` of 100000 x 100000 (a typing error) is refused by name
+/// before any cloud is allocated (it was: an abort, status 134) and before
+/// the output is created.
+#[test]
+fn a_frame_size_beyond_the_limit_is_refused() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let rec = dir.path().join("huge");
+    std::fs::create_dir(&rec).expect("mkdir");
+    let toml = std::fs::read_to_string(ramp16().join("recording.toml")).expect("toml");
+    let toml = toml
+        .replace("width = 512", "width = 100000")
+        .replace("height = 424", "height = 100000");
+    std::fs::write(rec.join("recording.toml"), toml).expect("write");
+    std::fs::write(
+        rec.join("frames.csv"),
+        "index,timestamp_ns,depth,color\n0,0,depth/000000.png,\n",
+    )
+    .expect("write");
+    let out = dir.path().join("huge.mcap");
+    let (code, stderr) = convert(&[
+        rec.to_str().expect("utf-8"),
+        "-o",
+        out.to_str().expect("utf-8"),
+    ]);
+    assert_eq!(code, Some(1), "{stderr}");
+    for part in [
+        "recording.toml",
+        "100000 x 100000",
+        "10000000000 points",
+        "--max-points",
+    ] {
+        assert!(stderr.contains(part), "{part}: {stderr}");
+    }
+    assert!(!out.exists());
+}
+
 #[test]
 fn a_converted_recording_has_one_message_per_frame_and_topic() {
     let dir = tempfile::tempdir().expect("temp dir");

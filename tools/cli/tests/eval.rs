@@ -142,6 +142,7 @@ fn write_recording(dir: &Path, slopes_deg: &[f64], truth: Truth) -> PathBuf {
 
 struct Output {
     success: bool,
+    code: Option<i32>,
     stdout: String,
     stderr: String,
 }
@@ -154,6 +155,7 @@ fn eval(args: &[&str]) -> Output {
         .unwrap_or_else(|e| panic!("cannot run {EVAL}: {e}"));
     Output {
         success: output.status.success(),
+        code: output.status.code(),
         stdout: String::from_utf8_lossy(&output.stdout).into_owned(),
         stderr: String::from_utf8_lossy(&output.stderr).into_owned(),
     }
@@ -546,6 +548,49 @@ fn files_in_a_glob_are_skipped_and_other_directories_explained() {
         "{}",
         out.stderr
     );
+}
+
+/// A recording whose `[depth]` is a typing error (100000 x 100000): its
+/// frames.csv and images are never reached.
+fn write_huge_recording(dir: &Path) -> PathBuf {
+    std::fs::create_dir_all(dir).unwrap();
+    let toml = std::fs::read_to_string(bundled_ramp16().join("recording.toml")).unwrap();
+    let toml = toml
+        .replace("width = 512", "width = 100000")
+        .replace("height = 424", "height = 100000");
+    assert!(toml.contains("height = 100000"), "{toml}");
+    std::fs::write(dir.join("recording.toml"), toml).unwrap();
+    std::fs::write(
+        dir.join("frames.csv"),
+        "index,timestamp_ns,depth,color\n0,0,depth/000000.png,\n1,1,depth/000001.png,\n",
+    )
+    .unwrap();
+    dir.to_path_buf()
+}
+
+/// Before the check, the cloud buffer of such a recording was allocated
+/// (160 GB) and the program aborted (status 134).
+#[test]
+fn a_frame_size_beyond_the_limit_is_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let huge = write_huge_recording(&dir.path().join("huge"));
+    let out = eval(&["--max-frames", "2", path_str(&huge)]);
+    assert_eq!(out.code, Some(1), "{}", out.stderr);
+    for part in [
+        "recording.toml",
+        "100000 x 100000",
+        "10000000000 points",
+        "limit is 1048576",
+        "--max-points",
+    ] {
+        assert!(out.stderr.contains(part), "{part}: {}", out.stderr);
+    }
+    // The limit is a flag: raised, the size passes the check (and the
+    // missing images are then bad frames).
+    let small = write_recording(&dir.path().join("small"), &[10.0], Truth::None);
+    let out = eval(&[path_str(&small), "--max-points", "1000"]);
+    assert!(!out.success);
+    assert!(out.stderr.contains("512 x 424"), "{}", out.stderr);
 }
 
 #[test]
