@@ -35,7 +35,8 @@ use crate::mcap_export::{McapExporter, McapFrame};
 (/slope/depth, foxglove.RawImage, 16UC1), the point cloud (/slope/cloud, foxglove.PointCloud: x, y, \
 z float32 and rgb) and the slope estimate (/slope/estimate, JSON with schema \
 slope.estimate.json/1: the keys of slope-echo --json), every channel JSON with a JSON Schema. \
-The estimates come from the estimator run here on each frame (--no-estimates leaves them out).
+The estimates come from the estimator run here on each frame (--no-estimates leaves them out). A recording \
+whose frames.csv lists no frames is refused (no file is written).
 
 OUT.mcap is written under a temporary name in its directory and renamed into place when finished: \
 a run that fails leaves an existing OUT.mcap as it was. SIGINT or SIGTERM (Ctrl-C) stops the \

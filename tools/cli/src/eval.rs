@@ -10,8 +10,8 @@
 //! order, so the tracked slope follows the recording as it would follow the
 //! camera, and never carries over from one recording to the next. A frame
 //! whose image cannot be read is reported as `bad_frame` with the reader's
-//! error and the evaluation goes on; a recording that cannot be opened is
-//! reported by name, the others are still evaluated, and the program exits
+//! error and the evaluation goes on; a recording that cannot be opened, or
+//! lists no frames, is reported by name, the others are still evaluated, and the program exits
 //! non-zero at the end ([`EvalOutcome::check`]).
 //!
 //! SIGINT/SIGTERM stop the run after the frame being evaluated: the
@@ -72,8 +72,8 @@ the recording. Per frame the JSON also gives both planes ([a, b, c, d], camera f
 inliers, RMS and area, the confidence and its reasons, ground_from_mount and the tracked slope; \
 the summary counts the ok frames whose confidence is below 0.5 (low_confidence_frames).\n\n\
 A frame whose depth image cannot be read is reported with status bad_frame and its error; the \
-evaluation goes on. A recording that cannot be opened is reported by name, the others are still \
-evaluated, and the exit status is non-zero.\n\n\
+evaluation goes on. A recording that cannot be opened, or whose frames.csv lists no frames, is \
+reported by name, the others are still evaluated, and the exit status is non-zero.\n\n\
 SIGINT or SIGTERM (Ctrl-C) stops the run after the frame being evaluated: the recording under way \
 is reported with the frames evaluated so far (its summary covers those frames only), recordings \
 not reached are not reported, and the run says \"interrupted after N of M frames\" (below the \
@@ -691,12 +691,16 @@ pub fn run(args: &EvalArgs, stop: &StopFlag) -> anyhow::Result<EvalOutcome> {
 
 /// Opens the recording in `path` to read its frames in this process
 /// (`slope-eval`, `slope-convert`): refuses a `[depth]` size of more than
-/// `max_points` points (`--max-points`) before any cloud is allocated.
+/// `max_points` points (`--max-points`) before any cloud is allocated, and
+/// a recording without frames (as `slope-replay` does).
 pub fn open_recording(path: &Path, max_points: usize) -> anyhow::Result<Recording> {
     let recording = Recording::open(path)?;
     recording
         .check_points(max_points)
         .map_err(|err| anyhow::anyhow!("{err} (--max-points)"))?;
+    if recording.frames().is_empty() {
+        bail!("its frames.csv lists no frames");
+    }
     Ok(recording)
 }
 

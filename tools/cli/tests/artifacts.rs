@@ -206,6 +206,29 @@ fn a_frame_size_beyond_the_limit_is_refused() {
     assert!(!out.exists());
 }
 
+/// A recording whose frames.csv has its header only is refused as by
+/// slope-replay (it was converted into an empty MCAP, status 0).
+#[test]
+fn a_recording_without_frames_is_refused() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let rec = dir.path().join("empty");
+    std::fs::create_dir(&rec).expect("mkdir");
+    std::fs::copy(ramp16().join("recording.toml"), rec.join("recording.toml")).expect("copy");
+    std::fs::write(rec.join("frames.csv"), "index,timestamp_ns,depth,color\n").expect("write");
+    let out = dir.path().join("empty.mcap");
+    let (code, stderr) = convert(&[
+        rec.to_str().expect("utf-8"),
+        "-o",
+        out.to_str().expect("utf-8"),
+    ]);
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(
+        stderr.contains("its frames.csv lists no frames") && stderr.contains("empty"),
+        "{stderr}"
+    );
+    assert!(!out.exists());
+}
+
 #[test]
 fn a_converted_recording_has_one_message_per_frame_and_topic() {
     let dir = tempfile::tempdir().expect("temp dir");

@@ -593,6 +593,36 @@ fn a_frame_size_beyond_the_limit_is_refused_by_name() {
     assert!(out.stderr.contains("512 x 424"), "{}", out.stderr);
 }
 
+/// A recording whose frames.csv has its header only is an error, as for
+/// slope-replay (it was a row of zeros and status 0); the other recordings
+/// are still evaluated.
+#[test]
+fn a_recording_without_frames_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let empty = write_recording(&dir.path().join("empty"), &[], Truth::None);
+    let out = eval(&[path_str(&empty)]);
+    assert_eq!(out.code, Some(1), "{}{}", out.stdout, out.stderr);
+    assert!(out.stdout.is_empty(), "{}", out.stdout);
+    let expected = format!(
+        "cannot evaluate {}: its frames.csv lists no frames",
+        path_str(&empty)
+    );
+    assert!(out.stderr.contains(&expected), "{}", out.stderr);
+    let good = write_recording(&dir.path().join("good"), &[10.0], Truth::Recording(10.0));
+    let out = eval(&[
+        path_str(&empty),
+        path_str(&good),
+        "--json",
+        "--method",
+        "tls",
+    ]);
+    assert_eq!(out.code, Some(1), "{}", out.stderr);
+    assert!(out.stderr.contains(&expected), "{}", out.stderr);
+    let reports = json_lines(&out.stdout);
+    assert_eq!(reports.len(), 1);
+    assert_eq!(reports[0]["recording"], path_str(&good));
+}
+
 #[test]
 fn a_bad_frame_is_reported_and_the_others_evaluated() {
     let dir = tempfile::tempdir().unwrap();
