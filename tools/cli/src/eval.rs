@@ -93,6 +93,8 @@ non-zero. A second signal ends the program at once (status 130).",
 )]
 pub struct EvalArgs {
     /// Recording directories (each holds recording.toml and frames.csv).
+    /// Files among them are skipped with a warning (for shell globs such
+    /// as DIR/*); only files, no directory, is an error.
     #[arg(required = true, value_name = "RECORDING")]
     pub recordings: Vec<PathBuf>,
 
@@ -558,11 +560,13 @@ pub fn run(args: &EvalArgs, stop: &StopFlag) -> anyhow::Result<EvalOutcome> {
     }
     let mut outcome = EvalOutcome::default();
     let mut opened = Vec::new();
+    let mut files = Vec::new();
     for path in &args.recordings {
         // A shell glob over a folder of recordings also names its files
         // (README.md, make.sh): those are skipped, not failures.
         if path.is_file() {
             tracing::warn!(path = %path.display(), "skipping a file: a recording is a directory");
+            files.push(path.display().to_string());
             continue;
         }
         match open_recording(path, args.max_points) {
@@ -573,6 +577,13 @@ pub fn run(args: &EvalArgs, stop: &StopFlag) -> anyhow::Result<EvalOutcome> {
                 outcome.failures.push(message);
             }
         }
+    }
+    if files.len() == args.recordings.len() {
+        bail!(
+            "no recording directory was given, only files ({}): a recording is a directory \
+             with recording.toml, frames.csv and depth/",
+            files.join(", ")
+        );
     }
     let frame_limit = |recording: &Recording| {
         let max = args

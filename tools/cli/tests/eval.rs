@@ -539,6 +539,18 @@ fn files_in_a_glob_are_skipped_and_other_directories_explained() {
     assert!(out.success, "{}", out.stderr);
     assert!(out.stderr.contains("skipping a file"), "{}", out.stderr);
     assert_eq!(json_lines(&out.stdout).len(), 1);
+    // Only files, no directory: nothing was evaluated, and that is an
+    // error (it was a warning and status 0).
+    let frames_csv = good.join("frames.csv");
+    let out = eval(&[path_str(&frames_csv), path_str(&readme)]);
+    assert_eq!(out.code, Some(1), "{}", out.stderr);
+    assert!(out.stdout.is_empty(), "{}", out.stdout);
+    assert!(
+        out.stderr.contains("no recording directory was given")
+            && out.stderr.contains(path_str(&frames_csv)),
+        "{}",
+        out.stderr
+    );
     let empty = dir.path().join("empty");
     std::fs::create_dir(&empty).unwrap();
     let out = eval(&[path_str(&empty), "--method", "tls"]);
