@@ -136,7 +136,8 @@ pub struct EvalArgs {
     pub render: Option<PathBuf>,
 
     /// The frame to render and export (its index in frames.csv); default:
-    /// the middle one of the evaluated frames.
+    /// the middle one of the evaluated frames. A frame that was not
+    /// evaluated, or whose depth image cannot be read, is an error.
     #[arg(long, value_name = "INDEX", conflicts_with = "render_every")]
     pub render_frame: Option<u64>,
 
@@ -763,6 +764,20 @@ fn evaluate_recording(
                 bar.suspend(|| {
                     tracing::warn!(recording = label, frame = frame.index, "bad frame: {error}")
                 });
+                if wanted && target.artifacts.frame == Some(frame.index) {
+                    failures.push(format!(
+                        "cannot render frame {} of {label}: it is a bad frame: {error}",
+                        frame.index
+                    ));
+                } else if wanted {
+                    bar.suspend(|| {
+                        tracing::warn!(
+                            recording = label,
+                            frame = frame.index,
+                            "not rendered: bad frame"
+                        )
+                    });
+                }
                 for per_method in &mut results {
                     per_method.push(FrameResult {
                         index: frame.index,

@@ -816,6 +816,32 @@ fn render_frame_picks_the_frame_and_an_unknown_one_fails() {
     assert!(out.stderr.contains(path_str(&rec)), "{}", out.stderr);
 }
 
+/// A requested frame whose depth image cannot be read is an error naming
+/// the frame and why (it was: an empty render directory and status 0).
+#[test]
+fn render_frame_of_a_bad_frame_fails() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = write_recording(&dir.path().join("ramp"), &[20.0; 3], Truth::Recording(20.0));
+    std::fs::write(rec.join("depth/000001.png"), b"not a png").unwrap();
+    let out_dir = dir.path().join("pictures");
+    let out = eval(&[
+        path_str(&rec),
+        "--method",
+        "tls",
+        "--render",
+        path_str(&out_dir),
+        "--render-frame",
+        "1",
+    ]);
+    assert_eq!(out.code, Some(1), "{}", out.stderr);
+    let expected = format!(
+        "cannot render frame 1 of {}: it is a bad frame",
+        path_str(&rec)
+    );
+    assert!(out.stderr.contains(&expected), "{}", out.stderr);
+    assert!(out.stderr.contains("000001.png"), "{}", out.stderr);
+}
+
 #[test]
 fn bad_arguments_are_refused() {
     let out = eval(&["somewhere", "--method", "magic"]);
