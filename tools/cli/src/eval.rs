@@ -30,7 +30,7 @@ use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context};
-use clap::Parser;
+use clap::{ArgGroup, Parser};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
@@ -56,6 +56,9 @@ pub const LOW_CONFIDENCE: f64 = 0.5;
 #[derive(Debug, Parser)]
 #[command(
     name = "slope-eval",
+    // --render-frame and --render-every choose what --render and
+    // --export-ply write: without one of those they would do nothing.
+    group(ArgGroup::new("artifact_output").args(["render", "export_ply"]).multiple(true)),
     version,
     about = "Run the slope estimator offline on recordings: accuracy against ground truth, per-stage timings",
     long_about = "Runs the estimator in this process (no IPC) on each frame of each recording and \
@@ -138,12 +141,18 @@ pub struct EvalArgs {
     /// The frame to render and export (its index in frames.csv); default:
     /// the middle one of the evaluated frames. A frame that was not
     /// evaluated, or whose depth image cannot be read, is an error.
-    #[arg(long, value_name = "INDEX", conflicts_with = "render_every")]
+    #[arg(
+        long,
+        value_name = "INDEX",
+        conflicts_with = "render_every",
+        requires = "artifact_output"
+    )]
     pub render_frame: Option<u64>,
 
     /// Render and export every Nth evaluated frame (the first, the N+1th,
-    /// ...) instead of one.
-    #[arg(long, value_name = "N", value_parser = render_every_arg)]
+    /// ...) instead of one. Like --render-frame, needs --render or
+    /// --export-ply.
+    #[arg(long, value_name = "N", value_parser = render_every_arg, requires = "artifact_output")]
     pub render_every: Option<u64>,
 
     /// Write the cloud of the rendered frame(s) as PLY into DIR (plane

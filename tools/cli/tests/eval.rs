@@ -842,6 +842,35 @@ fn render_frame_of_a_bad_frame_fails() {
     assert!(out.stderr.contains("000001.png"), "{}", out.stderr);
 }
 
+/// --render-frame and --render-every only choose what --render and
+/// --export-ply write: alone they are a usage error (they were ignored).
+#[test]
+fn render_choices_without_an_output_are_a_usage_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = write_recording(&dir.path().join("ramp"), &[20.0], Truth::None);
+    for flags in [["--render-every", "2"], ["--render-frame", "0"]] {
+        let mut args = vec![path_str(&rec)];
+        args.extend(flags);
+        let out = eval(&args);
+        assert_eq!(out.code, Some(2), "{flags:?}: {}", out.stderr);
+        assert!(out.stdout.is_empty(), "{}", out.stdout);
+        assert!(
+            out.stderr.contains("--render <DIR>") && out.stderr.contains("--export-ply <DIR>"),
+            "{flags:?}: {}",
+            out.stderr
+        );
+    }
+    let ply = dir.path().join("ply");
+    let out = eval(&[
+        path_str(&rec),
+        "--render-frame",
+        "0",
+        "--export-ply",
+        path_str(&ply),
+    ]);
+    assert!(out.success, "{}", out.stderr);
+}
+
 #[test]
 fn bad_arguments_are_refused() {
     let out = eval(&["somewhere", "--method", "magic"]);
