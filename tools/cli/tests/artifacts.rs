@@ -229,6 +229,29 @@ fn a_recording_without_frames_is_refused() {
     assert!(!out.exists());
 }
 
+/// An output that is a directory, or in a directory that does not exist,
+/// is refused before anything is converted (a directory was refused only
+/// by the final rename: "Is a directory", after the whole conversion).
+#[test]
+fn an_output_that_cannot_be_written_is_refused_up_front() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let recording = ramp16();
+    let rec = recording.to_str().expect("utf-8");
+    let (code, stderr) = convert(&[rec, "-o", dir.path().to_str().expect("utf-8")]);
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(stderr.contains("it is a directory"), "{stderr}");
+    assert!(!stderr.contains("converted"), "{stderr}");
+    let missing = dir.path().join("no-such-dir/out.mcap");
+    let (code, stderr) = convert(&[rec, "-o", missing.to_str().expect("utf-8")]);
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(
+        stderr.contains("no-such-dir") && stderr.contains("does not exist"),
+        "{stderr}"
+    );
+    let entries = std::fs::read_dir(dir.path()).expect("dir").count();
+    assert_eq!(entries, 0, "no temporary file left");
+}
+
 #[test]
 fn a_converted_recording_has_one_message_per_frame_and_topic() {
     let dir = tempfile::tempdir().expect("temp dir");
