@@ -252,6 +252,46 @@ fn an_output_that_cannot_be_written_is_refused_up_front() {
     assert_eq!(entries, 0, "no temporary file left");
 }
 
+/// A colour image that cannot be read is a warning: the frame is still
+/// converted, its points with rgb 0.
+#[test]
+fn an_unreadable_colour_image_is_a_counted_warning() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let rec = dir.path().join("ramp");
+    std::fs::create_dir(&rec).expect("mkdir");
+    for file in ["recording.toml", "frames.csv"] {
+        std::fs::copy(ramp16().join(file), rec.join(file)).expect("copy");
+    }
+    for sub in ["depth", "color"] {
+        std::fs::create_dir(rec.join(sub)).expect("mkdir");
+        std::fs::copy(
+            ramp16().join(sub).join("000000.png"),
+            rec.join(sub).join("000000.png"),
+        )
+        .expect("copy");
+    }
+    std::fs::write(rec.join("color/000000.png"), b"not a png").expect("write");
+    let out = dir.path().join("ramp.mcap");
+    let (code, stderr) = convert(&[
+        rec.to_str().expect("utf-8"),
+        "-o",
+        out.to_str().expect("utf-8"),
+        "--max-frames",
+        "1",
+        "--no-estimates",
+    ]);
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(
+        stderr.contains("converting without colour") && stderr.contains("color/000000.png"),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("1 frame(s) converted without colour"),
+        "{stderr}"
+    );
+    assert!(out.is_file());
+}
+
 #[test]
 fn a_converted_recording_has_one_message_per_frame_and_topic() {
     let dir = tempfile::tempdir().expect("temp dir");
@@ -311,6 +351,17 @@ fn a_converted_recording_has_one_message_per_frame_and_topic() {
         points.len(),
         measured * 16,
         "one 16-byte point per measured pixel"
+    );
+    // ramp16 has colour images: the points carry them (rgb was 0 for all).
+    let rgb: Vec<u32> = points
+        .chunks_exact(16)
+        .map(|p| u32::from_le_bytes([p[12], p[13], p[14], p[15]]))
+        .collect();
+    let coloured = rgb.iter().filter(|&&c| c != 0).count();
+    assert!(
+        coloured * 10 > rgb.len() * 9,
+        "{coloured} of {} points coloured",
+        rgb.len()
     );
     for (k, e) in per_topic["/slope/estimate"].iter().enumerate() {
         assert_eq!(e["schema"], "slope.estimate.json/1");
