@@ -573,3 +573,30 @@ fn an_image_of_the_wrong_size_is_rejected() {
     rec.read_depth_into(&rec.frames()[0], &mut image).unwrap();
     assert_eq!(image.data, (1..=(W * H) as u16).collect::<Vec<_>>());
 }
+
+#[test]
+fn a_frame_larger_than_the_limit_is_refused_before_any_allocation() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = base(&tmp);
+    let recording = Recording::open(&dir).unwrap();
+    assert_eq!(recording.check_points(12).unwrap(), 12);
+    let err = recording.check_points(11).unwrap_err();
+    assert!(matches!(err, RecordingError::TooManyPoints { .. }), "{err}");
+    assert_names(
+        &err,
+        &["recording.toml", "4 x 3", "12 points", "limit is 11"],
+    );
+
+    // A typing error in [depth] opens (images are checked when read) but
+    // is refused by the check, not by an allocation failure.
+    edit(&dir, "recording.toml", "width = 4", "width = 100000");
+    edit(&dir, "recording.toml", "height = 3", "height = 100000");
+    let recording = Recording::open(&dir).unwrap();
+    let err = recording
+        .check_points(slope_ipc_types::DEFAULT_MAX_CLOUD_POINTS)
+        .unwrap_err();
+    assert_names(
+        &err,
+        &["100000 x 100000", "10000000000 points", "limit is 1048576"],
+    );
+}

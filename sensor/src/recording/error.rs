@@ -180,6 +180,21 @@ pub enum RecordingError {
         path.display()
     )]
     NoTruthColumn { path: PathBuf, row: usize },
+
+    /// `[depth]` gives a frame of more points than the reader accepts: a
+    /// typing error, or an image no cloud buffer should be allocated for.
+    #[error(
+        "{}: [depth] width x height is {width} x {height}: a frame of {points} points; \
+         the limit is {max_points}",
+        path.display()
+    )]
+    TooManyPoints {
+        path: PathBuf,
+        width: u32,
+        height: u32,
+        points: u64,
+        max_points: usize,
+    },
 }
 
 /// " line L, column C", or nothing.

@@ -155,6 +155,28 @@ impl Recording {
         self.meta.mount.to_mount()
     }
 
+    /// The points of one frame (`[depth]` width x height), or
+    /// [`RecordingError::TooManyPoints`] naming `recording.toml` when that
+    /// is more than `max_points` (or none at all). Readers call this before
+    /// allocating a frame's cloud: `[depth]` is only checked to be positive,
+    /// and a typing error such as 100000 x 100000 would ask for a buffer of
+    /// 10^10 points. [`slope_ipc_types::DEFAULT_MAX_CLOUD_POINTS`] is the
+    /// limit the publishers use.
+    pub fn check_points(&self, max_points: usize) -> Result<usize, RecordingError> {
+        let (width, height) = (self.meta.depth.width, self.meta.depth.height);
+        let points = u64::from(width) * u64::from(height);
+        match usize::try_from(points) {
+            Ok(n) if n > 0 && n <= max_points => Ok(n),
+            _ => Err(RecordingError::TooManyPoints {
+                path: self.dir.join(META_FILE),
+                width,
+                height,
+                points,
+                max_points,
+            }),
+        }
+    }
+
     /// A projector for this recording's depth images.
     pub fn projector(&self) -> Projector {
         let d = &self.meta.depth;

@@ -12,14 +12,15 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use clap::Parser;
-use slope_ipc_types::{CloudPoint, SlopeEstimate};
+use slope_ipc_types::{CloudPoint, SlopeEstimate, DEFAULT_MAX_CLOUD_POINTS};
 use slope_pipeline::{CloudView, Estimator, FrameInfo};
-use slope_sensor::recording::{DepthImage, Recording};
+use slope_sensor::recording::{ColorImage, DepthImage, FrameEntry, Recording};
 
 use slope_sensor::publish::StopFlag;
 
 use crate::cli::{max_frames_arg, require_output, Interruption, LogArgs};
 use crate::estimator::{load_config, method_arg};
+use crate::eval::open_recording;
 use crate::mcap_export::{McapExporter, McapFrame};
 
 #[derive(Debug, Parser)]
@@ -32,9 +33,11 @@ use crate::mcap_export::{McapExporter, McapFrame};
     about = "Convert a recording into an MCAP file (Foxglove, ROS 2 tooling): depth, cloud, estimates",
     long_about = "Writes OUT.mcap with, per frame of RECORDING, the depth image \
 (/slope/depth, foxglove.RawImage, 16UC1), the point cloud (/slope/cloud, foxglove.PointCloud: x, y, \
-z float32 and rgb) and the slope estimate (/slope/estimate, JSON with schema \
+z float32 and rgb: the recording's colour image, 0 for a frame without one) and the slope estimate (/slope/estimate, JSON with schema \
 slope.estimate.json/1: the keys of slope-echo --json), every channel JSON with a JSON Schema. \
-The estimates come from the estimator run here on each frame (--no-estimates leaves them out).
+The estimates come from the estimator run here on each frame (--no-estimates leaves them out). A colour \
+image that cannot be read is a warning: that frame's points get rgb 0. A recording \
+whose frames.csv lists no frames is refused (no file is written).
 
 OUT.mcap is written under a temporary name in its directory and renamed into place when finished: \
 a run that fails leaves an existing OUT.mcap as it was. SIGINT or SIGTERM (Ctrl-C) stops the \
@@ -74,6 +77,11 @@ pub struct ConvertArgs {
     /// Leave the estimates out (depth and cloud only).
     #[arg(long)]
     pub no_estimates: bool,
+
+    /// Largest frame (width x height of [depth]) to accept; a recording
+    /// with a larger one is refused before any cloud is allocated.
+    #[arg(long, default_value_t = DEFAULT_MAX_CLOUD_POINTS)]
+    pub max_points: usize,
 
     #[command(flatten)]
     pub log: LogArgs,
@@ -125,6 +133,9 @@ pub struct ConvertStats {
     pub frames: u64,
     pub estimates: u64,
     pub bad_frames: u64,
+    /// Frames converted without colour (rgb 0) because their colour image
+    /// could not be read.
+    pub bad_colors: u64,
     /// Set when a signal stopped the run before every frame was converted.
     pub interrupted: Option<Interruption>,
 }
@@ -133,7 +144,7 @@ pub struct ConvertStats {
 /// set, the run ends after the frame under way and finishes the file with
 /// the frames converted so far.
 pub fn run(args: &ConvertArgs, stop: &StopFlag) -> anyhow::Result<ConvertStats> {
-    let recording = Recording::open(&args.recording)
+    let recording = open_recording(&args.recording, args.max_points)
         .with_context(|| format!("cannot convert {}", args.recording.display()))?;
     let config =
         load_config(args.config.as_ref(), args.method)?.for_sensor(&recording.meta().sensor);
@@ -161,7 +172,12 @@ pub fn run(args: &ConvertArgs, stop: &StopFlag) -> anyhow::Result<ConvertStats> 
             stats.bad_frames += 1;
             continue;
         }
-        projector.project_into(&depth.data, None, &mut points);
+        let color = read_color(&recording, frame, &mut stats);
+        projector.project_into(
+            &depth.data,
+            color.as_ref().map(|c| &c.data[..]),
+            &mut points,
+        );
         let message = estimator.as_mut().map(|estimator| {
             let view = CloudView {
                 points: &points,
@@ -197,6 +213,12 @@ pub fn run(args: &ConvertArgs, stop: &StopFlag) -> anyhow::Result<ConvertStats> 
         tracing::debug!(frame = frame.index, "frame converted");
     }
     exporter.finish()?;
+    if stats.bad_colors > 0 {
+        tracing::warn!(
+            "{} frame(s) converted without colour: their colour image could not be read",
+            stats.bad_colors
+        );
+    }
     if let Some(interruption) = stats.interrupted {
         tracing::warn!(
             "{interruption}; {} holds the frames converted",
@@ -208,7 +230,31 @@ pub fn run(args: &ConvertArgs, stop: &StopFlag) -> anyhow::Result<ConvertStats> 
         frames = stats.frames,
         estimates = stats.estimates,
         bad_frames = stats.bad_frames,
+        bad_colors = stats.bad_colors,
         "converted"
     );
     Ok(stats)
+}
+
+/// The colour image of `frame`, registered to its depth image (the
+/// recording format's colour/), or `None`: none in frames.csv, or one that
+/// cannot be read (a warning, counted in `stats.bad_colors`; the frame is
+/// converted with rgb 0, as without colour).
+fn read_color(
+    recording: &Recording,
+    frame: &FrameEntry,
+    stats: &mut ConvertStats,
+) -> Option<ColorImage> {
+    match recording.read_color(frame) {
+        Ok(color) => color,
+        Err(err) => {
+            tracing::warn!(
+                frame = frame.index,
+                "converting without colour: {}",
+                slope_sensor::error_chain::ErrorChain(&err)
+            );
+            stats.bad_colors += 1;
+            None
+        }
+    }
 }

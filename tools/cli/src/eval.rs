@@ -10,8 +10,8 @@
 //! order, so the tracked slope follows the recording as it would follow the
 //! camera, and never carries over from one recording to the next. A frame
 //! whose image cannot be read is reported as `bad_frame` with the reader's
-//! error and the evaluation goes on; a recording that cannot be opened is
-//! reported by name, the others are still evaluated, and the program exits
+//! error and the evaluation goes on; a recording that cannot be opened, or
+//! lists no frames, is reported by name, the others are still evaluated, and the program exits
 //! non-zero at the end ([`EvalOutcome::check`]).
 //!
 //! SIGINT/SIGTERM stop the run after the frame being evaluated: the
@@ -30,11 +30,11 @@ use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context};
-use clap::Parser;
+use clap::{ArgGroup, Parser};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
-use slope_ipc_types::{CloudPoint, EstimateStatus, SlopeMethod};
+use slope_ipc_types::{CloudPoint, EstimateStatus, SlopeMethod, DEFAULT_MAX_CLOUD_POINTS};
 use slope_pipeline::tracking::TrackedSlope;
 use slope_pipeline::{
     CloudView, Estimate, Estimator, EstimatorConfig, FrameInfo, PlaneEstimate, StageTimings,
@@ -56,6 +56,9 @@ pub const LOW_CONFIDENCE: f64 = 0.5;
 #[derive(Debug, Parser)]
 #[command(
     name = "slope-eval",
+    // --render-frame and --render-every choose what --render and
+    // --export-ply write: without one of those they would do nothing.
+    group(ArgGroup::new("artifact_output").args(["render", "export_ply"]).multiple(true)),
     version,
     about = "Run the slope estimator offline on recordings: accuracy against ground truth, per-stage timings",
     long_about = "Runs the estimator in this process (no IPC) on each frame of each recording and \
@@ -72,8 +75,8 @@ the recording. Per frame the JSON also gives both planes ([a, b, c, d], camera f
 inliers, RMS and area, the confidence and its reasons, ground_from_mount and the tracked slope; \
 the summary counts the ok frames whose confidence is below 0.5 (low_confidence_frames).\n\n\
 A frame whose depth image cannot be read is reported with status bad_frame and its error; the \
-evaluation goes on. A recording that cannot be opened is reported by name, the others are still \
-evaluated, and the exit status is non-zero.\n\n\
+evaluation goes on. A recording that cannot be opened, or whose frames.csv lists no frames, is \
+reported by name, the others are still evaluated, and the exit status is non-zero.\n\n\
 SIGINT or SIGTERM (Ctrl-C) stops the run after the frame being evaluated: the recording under way \
 is reported with the frames evaluated so far (its summary covers those frames only), recordings \
 not reached are not reported, and the run says \"interrupted after N of M frames\" (below the \
@@ -93,6 +96,8 @@ non-zero. A second signal ends the program at once (status 130).",
 )]
 pub struct EvalArgs {
     /// Recording directories (each holds recording.toml and frames.csv).
+    /// Files among them are skipped with a warning (for shell globs such
+    /// as DIR/*); only files, no directory, is an error.
     #[arg(required = true, value_name = "RECORDING")]
     pub recordings: Vec<PathBuf>,
 
@@ -134,13 +139,20 @@ pub struct EvalArgs {
     pub render: Option<PathBuf>,
 
     /// The frame to render and export (its index in frames.csv); default:
-    /// the middle one of the evaluated frames.
-    #[arg(long, value_name = "INDEX", conflicts_with = "render_every")]
+    /// the middle one of the evaluated frames. A frame that was not
+    /// evaluated, or whose depth image cannot be read, is an error.
+    #[arg(
+        long,
+        value_name = "INDEX",
+        conflicts_with = "render_every",
+        requires = "artifact_output"
+    )]
     pub render_frame: Option<u64>,
 
     /// Render and export every Nth evaluated frame (the first, the N+1th,
-    /// ...) instead of one.
-    #[arg(long, value_name = "N", value_parser = render_every_arg)]
+    /// ...) instead of one. Like --render-frame, needs --render or
+    /// --export-ply.
+    #[arg(long, value_name = "N", value_parser = render_every_arg, requires = "artifact_output")]
     pub render_every: Option<u64>,
 
     /// Write the cloud of the rendered frame(s) as PLY into DIR (plane
@@ -152,6 +164,11 @@ pub struct EvalArgs {
     /// the tracked slope and the truth, and the time per frame.
     #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
+
+    /// Largest frame (width x height of [depth]) to accept; a recording
+    /// with a larger one is refused before any cloud is allocated.
+    #[arg(long, default_value_t = DEFAULT_MAX_CLOUD_POINTS)]
+    pub max_points: usize,
 
     /// -v/-q (-q also hides the progress bar).
     #[command(flatten)]
@@ -553,25 +570,30 @@ pub fn run(args: &EvalArgs, stop: &StopFlag) -> anyhow::Result<EvalOutcome> {
     }
     let mut outcome = EvalOutcome::default();
     let mut opened = Vec::new();
+    let mut files = Vec::new();
     for path in &args.recordings {
         // A shell glob over a folder of recordings also names its files
         // (README.md, make.sh): those are skipped, not failures.
         if path.is_file() {
             tracing::warn!(path = %path.display(), "skipping a file: a recording is a directory");
+            files.push(path.display().to_string());
             continue;
         }
-        match Recording::open(path) {
+        match open_recording(path, args.max_points) {
             Ok(recording) => opened.push((path, recording)),
             Err(err) => {
-                let message = format!(
-                    "cannot evaluate {}: {}",
-                    path.display(),
-                    slope_sensor::error_chain::ErrorChain(&err)
-                );
+                let message = format!("cannot evaluate {}: {err:#}", path.display());
                 // Reported once, with the others, when the run ends.
                 outcome.failures.push(message);
             }
         }
+    }
+    if files.len() == args.recordings.len() {
+        bail!(
+            "no recording directory was given, only files ({}): a recording is a directory \
+             with recording.toml, frames.csv and depth/",
+            files.join(", ")
+        );
     }
     let frame_limit = |recording: &Recording| {
         let max = args
@@ -688,6 +710,21 @@ pub fn run(args: &EvalArgs, stop: &StopFlag) -> anyhow::Result<EvalOutcome> {
     Ok(outcome)
 }
 
+/// Opens the recording in `path` to read its frames in this process
+/// (`slope-eval`, `slope-convert`): refuses a `[depth]` size of more than
+/// `max_points` points (`--max-points`) before any cloud is allocated, and
+/// a recording without frames (as `slope-replay` does).
+pub fn open_recording(path: &Path, max_points: usize) -> anyhow::Result<Recording> {
+    let recording = Recording::open(path)?;
+    recording
+        .check_points(max_points)
+        .map_err(|err| anyhow::anyhow!("{err} (--max-points)"))?;
+    if recording.frames().is_empty() {
+        bail!("its frames.csv lists no frames");
+    }
+    Ok(recording)
+}
+
 /// Writes one line to stdout without disturbing the progress bar. `false`
 /// when stdout is a closed pipe.
 fn print_line(bar: &ProgressBar, text: &str) -> anyhow::Result<bool> {
@@ -736,6 +773,20 @@ fn evaluate_recording(
                 bar.suspend(|| {
                     tracing::warn!(recording = label, frame = frame.index, "bad frame: {error}")
                 });
+                if wanted && target.artifacts.frame == Some(frame.index) {
+                    failures.push(format!(
+                        "cannot render frame {} of {label}: it is a bad frame: {error}",
+                        frame.index
+                    ));
+                } else if wanted {
+                    bar.suspend(|| {
+                        tracing::warn!(
+                            recording = label,
+                            frame = frame.index,
+                            "not rendered: bad frame"
+                        )
+                    });
+                }
                 for per_method in &mut results {
                     per_method.push(FrameResult {
                         index: frame.index,

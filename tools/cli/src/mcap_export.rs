@@ -157,13 +157,27 @@ impl McapExporter {
     /// Writes into a temporary file beside `path` that [`Self::finish`]
     /// renames over `path` (`slope-convert`): until then a file already at
     /// `path` is untouched, and a run that fails leaves nothing behind (the
-    /// temporary file is removed when the exporter is dropped).
+    /// temporary file is removed when the exporter is dropped). A `path`
+    /// that is a directory, or whose directory does not exist, is refused
+    /// here, before anything is converted, not at the final rename.
     pub fn create_replacing(path: &Path) -> anyhow::Result<Self> {
         let name = path.display().to_string();
         let dir = match path.parent() {
             Some(dir) if !dir.as_os_str().is_empty() => dir,
             _ => Path::new("."),
         };
+        if path.is_dir() {
+            anyhow::bail!(
+                "cannot write {name}: it is a directory; give a file name, e.g. -o {}",
+                path.join("out.mcap").display()
+            );
+        }
+        if !dir.is_dir() {
+            anyhow::bail!(
+                "cannot write {name}: the directory {} does not exist",
+                dir.display()
+            );
+        }
         let prefix = format!(
             ".{}.",
             path.file_name().unwrap_or_default().to_string_lossy()

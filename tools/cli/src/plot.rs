@@ -90,6 +90,30 @@ fn frame_range(reports: &[MethodReport]) -> std::ops::Range<f64> {
     }
 }
 
+/// The label of an x tick at frame `x`: the frame index where `x` is a
+/// whole number, nothing between frames (plotters puts ticks at fractions
+/// of a short range; "{x:.0}" made them "-0 0 0 1").
+pub fn frame_tick_label(x: f64) -> String {
+    let whole = x.round();
+    if (x - whole).abs() < 1e-6 {
+        // `+ 0.0` turns -0 into 0.
+        format!("{}", whole + 0.0)
+    } else {
+        String::new()
+    }
+}
+
+/// How many x ticks to ask plotters for: one per frame of `range` (at
+/// most 11, plotters' default), so that short ranges get whole frames.
+fn frame_tick_count(range: &std::ops::Range<f64>) -> usize {
+    let frames = (range.end - range.start).round().max(1.0);
+    if frames < 11.0 {
+        frames as usize
+    } else {
+        11
+    }
+}
+
 /// A y range holding `values` with a margin.
 fn value_range(values: impl Iterator<Item = f64>, floor: Option<f64>) -> std::ops::Range<f64> {
     let (lo, hi) = values
@@ -124,7 +148,8 @@ fn draw_slopes<DB: DrawingBackend>(
     chart
         .configure_mesh()
         .x_desc("frame")
-        .x_label_formatter(&|x| format!("{x:.0}"))
+        .x_labels(frame_tick_count(&frame_range(reports)))
+        .x_label_formatter(&|x| frame_tick_label(*x))
         .y_desc("slope (degrees)")
         .label_style((FAMILY, 15))
         .draw()
@@ -205,7 +230,8 @@ fn draw_times<DB: DrawingBackend>(
     chart
         .configure_mesh()
         .x_desc("frame")
-        .x_label_formatter(&|x| format!("{x:.0}"))
+        .x_labels(frame_tick_count(&frame_range(reports)))
+        .x_label_formatter(&|x| frame_tick_label(*x))
         .y_desc("time per frame (ms)")
         .label_style((FAMILY, 15))
         .draw()
@@ -217,9 +243,72 @@ fn draw_times<DB: DrawingBackend>(
             .iter()
             .filter_map(|f| Some((f.index as f64, f.ms.as_ref()?.0.total_ms)))
             .collect();
+        // A line needs two points: a single frame is drawn as a marker.
+        let markers = if points.len() == 1 { &points[..] } else { &[] };
+        chart
+            .draw_series(markers.iter().map(|&p| Circle::new(p, 4, colour.filled())))
+            .map_err(plot_error)?;
         chart
             .draw_series(LineSeries::new(points, colour.stroke_width(2)))
             .map_err(plot_error)?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::eval::{FrameDetails, FrameResult, Timings};
+    use slope_ipc_types::SlopeMethod;
+    use slope_pipeline::StageTimings;
+
+    #[test]
+    fn ticks_are_whole_frames_never_minus_zero() {
+        assert_eq!(frame_tick_label(-0.0), "0");
+        assert_eq!(frame_tick_label(-1e-9), "0");
+        assert_eq!(frame_tick_label(2.0), "2");
+        assert_eq!(frame_tick_label(-3.0), "-3");
+        assert_eq!(frame_tick_label(1234.0), "1234");
+        for between in [-0.4, -0.2, 0.2, 0.5, 1.5, 2.4] {
+            assert_eq!(frame_tick_label(between), "", "{between}");
+        }
+        assert_eq!(frame_tick_count(&(-0.5..0.5)), 1);
+        assert_eq!(frame_tick_count(&(-0.5..2.5)), 3);
+        assert_eq!(frame_tick_count(&(-0.5..29.5)), 11);
+    }
+
+    /// One frame: the time panel (a line of one point drew nothing) shows
+    /// a marker in the method's colour.
+    #[test]
+    fn a_single_frame_is_drawn_as_a_marker() {
+        let frame = FrameResult {
+            index: 0,
+            status: "no_ground",
+            slope_deg: None,
+            std_deg: None,
+            distance_m: None,
+            truth_deg: None,
+            ms: Some(Timings(StageTimings {
+                total_ms: 12.0,
+                stages: Vec::new(),
+            })),
+            error: None,
+            details: FrameDetails::default(),
+        };
+        let report = MethodReport::new("one".into(), SlopeMethod::Paper, vec![frame]);
+        let image = plot_recording("one", &[report]).expect("plot");
+        let RGBColor(r, g, b) = method_colour(SlopeMethod::Paper);
+        let top = (PLOT_SIZE.1 as f64 * 0.62) as usize;
+        let in_time_panel = image
+            .data
+            .chunks_exact(PLOT_SIZE.0 as usize)
+            .skip(top)
+            .flatten()
+            .filter(|&&p| p == [r, g, b])
+            .count();
+        assert!(
+            in_time_panel > 10,
+            "{in_time_panel} pixels of the method's colour"
+        );
+    }
 }

@@ -157,6 +157,141 @@ fn every_nth_frame_gets_an_overlay_and_a_ply_that_match_the_report() {
     assert!(blue > 200, "{blue} pixels of the paper method's colour");
 }
 
+/// `slope-convert` and its status and stderr.
+fn convert(args: &[&str]) -> (Option<i32>, String) {
+    let out = Command::new(CONVERT)
+        .args(args)
+        .env_remove("RUST_LOG")
+        .output()
+        .expect("run");
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// A `[depth]` of 100000 x 100000 (a typing error) is refused by name
+/// before any cloud is allocated (it was: an abort, status 134) and before
+/// the output is created.
+#[test]
+fn a_frame_size_beyond_the_limit_is_refused() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let rec = dir.path().join("huge");
+    std::fs::create_dir(&rec).expect("mkdir");
+    let toml = std::fs::read_to_string(ramp16().join("recording.toml")).expect("toml");
+    let toml = toml
+        .replace("width = 512", "width = 100000")
+        .replace("height = 424", "height = 100000");
+    std::fs::write(rec.join("recording.toml"), toml).expect("write");
+    std::fs::write(
+        rec.join("frames.csv"),
+        "index,timestamp_ns,depth,color\n0,0,depth/000000.png,\n",
+    )
+    .expect("write");
+    let out = dir.path().join("huge.mcap");
+    let (code, stderr) = convert(&[
+        rec.to_str().expect("utf-8"),
+        "-o",
+        out.to_str().expect("utf-8"),
+    ]);
+    assert_eq!(code, Some(1), "{stderr}");
+    for part in [
+        "recording.toml",
+        "100000 x 100000",
+        "10000000000 points",
+        "--max-points",
+    ] {
+        assert!(stderr.contains(part), "{part}: {stderr}");
+    }
+    assert!(!out.exists());
+}
+
+/// A recording whose frames.csv has its header only is refused as by
+/// slope-replay (it was converted into an empty MCAP, status 0).
+#[test]
+fn a_recording_without_frames_is_refused() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let rec = dir.path().join("empty");
+    std::fs::create_dir(&rec).expect("mkdir");
+    std::fs::copy(ramp16().join("recording.toml"), rec.join("recording.toml")).expect("copy");
+    std::fs::write(rec.join("frames.csv"), "index,timestamp_ns,depth,color\n").expect("write");
+    let out = dir.path().join("empty.mcap");
+    let (code, stderr) = convert(&[
+        rec.to_str().expect("utf-8"),
+        "-o",
+        out.to_str().expect("utf-8"),
+    ]);
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(
+        stderr.contains("its frames.csv lists no frames") && stderr.contains("empty"),
+        "{stderr}"
+    );
+    assert!(!out.exists());
+}
+
+/// An output that is a directory, or in a directory that does not exist,
+/// is refused before anything is converted (a directory was refused only
+/// by the final rename: "Is a directory", after the whole conversion).
+#[test]
+fn an_output_that_cannot_be_written_is_refused_up_front() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let recording = ramp16();
+    let rec = recording.to_str().expect("utf-8");
+    let (code, stderr) = convert(&[rec, "-o", dir.path().to_str().expect("utf-8")]);
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(stderr.contains("it is a directory"), "{stderr}");
+    assert!(!stderr.contains("converted"), "{stderr}");
+    let missing = dir.path().join("no-such-dir/out.mcap");
+    let (code, stderr) = convert(&[rec, "-o", missing.to_str().expect("utf-8")]);
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(
+        stderr.contains("no-such-dir") && stderr.contains("does not exist"),
+        "{stderr}"
+    );
+    let entries = std::fs::read_dir(dir.path()).expect("dir").count();
+    assert_eq!(entries, 0, "no temporary file left");
+}
+
+/// A colour image that cannot be read is a warning: the frame is still
+/// converted, its points with rgb 0.
+#[test]
+fn an_unreadable_colour_image_is_a_counted_warning() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let rec = dir.path().join("ramp");
+    std::fs::create_dir(&rec).expect("mkdir");
+    for file in ["recording.toml", "frames.csv"] {
+        std::fs::copy(ramp16().join(file), rec.join(file)).expect("copy");
+    }
+    for sub in ["depth", "color"] {
+        std::fs::create_dir(rec.join(sub)).expect("mkdir");
+        std::fs::copy(
+            ramp16().join(sub).join("000000.png"),
+            rec.join(sub).join("000000.png"),
+        )
+        .expect("copy");
+    }
+    std::fs::write(rec.join("color/000000.png"), b"not a png").expect("write");
+    let out = dir.path().join("ramp.mcap");
+    let (code, stderr) = convert(&[
+        rec.to_str().expect("utf-8"),
+        "-o",
+        out.to_str().expect("utf-8"),
+        "--max-frames",
+        "1",
+        "--no-estimates",
+    ]);
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(
+        stderr.contains("converting without colour") && stderr.contains("color/000000.png"),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("1 frame(s) converted without colour"),
+        "{stderr}"
+    );
+    assert!(out.is_file());
+}
+
 #[test]
 fn a_converted_recording_has_one_message_per_frame_and_topic() {
     let dir = tempfile::tempdir().expect("temp dir");
@@ -216,6 +351,17 @@ fn a_converted_recording_has_one_message_per_frame_and_topic() {
         points.len(),
         measured * 16,
         "one 16-byte point per measured pixel"
+    );
+    // ramp16 has colour images: the points carry them (rgb was 0 for all).
+    let rgb: Vec<u32> = points
+        .chunks_exact(16)
+        .map(|p| u32::from_le_bytes([p[12], p[13], p[14], p[15]]))
+        .collect();
+    let coloured = rgb.iter().filter(|&&c| c != 0).count();
+    assert!(
+        coloured * 10 > rgb.len() * 9,
+        "{coloured} of {} points coloured",
+        rgb.len()
     );
     for (k, e) in per_topic["/slope/estimate"].iter().enumerate() {
         assert_eq!(e["schema"], "slope.estimate.json/1");

@@ -142,6 +142,7 @@ fn write_recording(dir: &Path, slopes_deg: &[f64], truth: Truth) -> PathBuf {
 
 struct Output {
     success: bool,
+    code: Option<i32>,
     stdout: String,
     stderr: String,
 }
@@ -154,6 +155,7 @@ fn eval(args: &[&str]) -> Output {
         .unwrap_or_else(|e| panic!("cannot run {EVAL}: {e}"));
     Output {
         success: output.status.success(),
+        code: output.status.code(),
         stdout: String::from_utf8_lossy(&output.stdout).into_owned(),
         stderr: String::from_utf8_lossy(&output.stderr).into_owned(),
     }
@@ -537,6 +539,18 @@ fn files_in_a_glob_are_skipped_and_other_directories_explained() {
     assert!(out.success, "{}", out.stderr);
     assert!(out.stderr.contains("skipping a file"), "{}", out.stderr);
     assert_eq!(json_lines(&out.stdout).len(), 1);
+    // Only files, no directory: nothing was evaluated, and that is an
+    // error (it was a warning and status 0).
+    let frames_csv = good.join("frames.csv");
+    let out = eval(&[path_str(&frames_csv), path_str(&readme)]);
+    assert_eq!(out.code, Some(1), "{}", out.stderr);
+    assert!(out.stdout.is_empty(), "{}", out.stdout);
+    assert!(
+        out.stderr.contains("no recording directory was given")
+            && out.stderr.contains(path_str(&frames_csv)),
+        "{}",
+        out.stderr
+    );
     let empty = dir.path().join("empty");
     std::fs::create_dir(&empty).unwrap();
     let out = eval(&[path_str(&empty), "--method", "tls"]);
@@ -546,6 +560,79 @@ fn files_in_a_glob_are_skipped_and_other_directories_explained() {
         "{}",
         out.stderr
     );
+}
+
+/// A recording whose `[depth]` is a typing error (100000 x 100000): its
+/// frames.csv and images are never reached.
+fn write_huge_recording(dir: &Path) -> PathBuf {
+    std::fs::create_dir_all(dir).unwrap();
+    let toml = std::fs::read_to_string(bundled_ramp16().join("recording.toml")).unwrap();
+    let toml = toml
+        .replace("width = 512", "width = 100000")
+        .replace("height = 424", "height = 100000");
+    assert!(toml.contains("height = 100000"), "{toml}");
+    std::fs::write(dir.join("recording.toml"), toml).unwrap();
+    std::fs::write(
+        dir.join("frames.csv"),
+        "index,timestamp_ns,depth,color\n0,0,depth/000000.png,\n1,1,depth/000001.png,\n",
+    )
+    .unwrap();
+    dir.to_path_buf()
+}
+
+/// Before the check, the cloud buffer of such a recording was allocated
+/// (160 GB) and the program aborted (status 134).
+#[test]
+fn a_frame_size_beyond_the_limit_is_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let huge = write_huge_recording(&dir.path().join("huge"));
+    let out = eval(&["--max-frames", "2", path_str(&huge)]);
+    assert_eq!(out.code, Some(1), "{}", out.stderr);
+    for part in [
+        "recording.toml",
+        "100000 x 100000",
+        "10000000000 points",
+        "limit is 1048576",
+        "--max-points",
+    ] {
+        assert!(out.stderr.contains(part), "{part}: {}", out.stderr);
+    }
+    // The limit is a flag: raised, the size passes the check (and the
+    // missing images are then bad frames).
+    let small = write_recording(&dir.path().join("small"), &[10.0], Truth::None);
+    let out = eval(&[path_str(&small), "--max-points", "1000"]);
+    assert!(!out.success);
+    assert!(out.stderr.contains("512 x 424"), "{}", out.stderr);
+}
+
+/// A recording whose frames.csv has its header only is an error, as for
+/// slope-replay (it was a row of zeros and status 0); the other recordings
+/// are still evaluated.
+#[test]
+fn a_recording_without_frames_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let empty = write_recording(&dir.path().join("empty"), &[], Truth::None);
+    let out = eval(&[path_str(&empty)]);
+    assert_eq!(out.code, Some(1), "{}{}", out.stdout, out.stderr);
+    assert!(out.stdout.is_empty(), "{}", out.stdout);
+    let expected = format!(
+        "cannot evaluate {}: its frames.csv lists no frames",
+        path_str(&empty)
+    );
+    assert!(out.stderr.contains(&expected), "{}", out.stderr);
+    let good = write_recording(&dir.path().join("good"), &[10.0], Truth::Recording(10.0));
+    let out = eval(&[
+        path_str(&empty),
+        path_str(&good),
+        "--json",
+        "--method",
+        "tls",
+    ]);
+    assert_eq!(out.code, Some(1), "{}", out.stderr);
+    assert!(out.stderr.contains(&expected), "{}", out.stderr);
+    let reports = json_lines(&out.stdout);
+    assert_eq!(reports.len(), 1);
+    assert_eq!(reports[0]["recording"], path_str(&good));
 }
 
 #[test]
@@ -727,6 +814,61 @@ fn render_frame_picks_the_frame_and_an_unknown_one_fails() {
     assert!(!out.success);
     assert!(out.stderr.contains("frame 7"), "{}", out.stderr);
     assert!(out.stderr.contains(path_str(&rec)), "{}", out.stderr);
+}
+
+/// A requested frame whose depth image cannot be read is an error naming
+/// the frame and why (it was: an empty render directory and status 0).
+#[test]
+fn render_frame_of_a_bad_frame_fails() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = write_recording(&dir.path().join("ramp"), &[20.0; 3], Truth::Recording(20.0));
+    std::fs::write(rec.join("depth/000001.png"), b"not a png").unwrap();
+    let out_dir = dir.path().join("pictures");
+    let out = eval(&[
+        path_str(&rec),
+        "--method",
+        "tls",
+        "--render",
+        path_str(&out_dir),
+        "--render-frame",
+        "1",
+    ]);
+    assert_eq!(out.code, Some(1), "{}", out.stderr);
+    let expected = format!(
+        "cannot render frame 1 of {}: it is a bad frame",
+        path_str(&rec)
+    );
+    assert!(out.stderr.contains(&expected), "{}", out.stderr);
+    assert!(out.stderr.contains("000001.png"), "{}", out.stderr);
+}
+
+/// --render-frame and --render-every only choose what --render and
+/// --export-ply write: alone they are a usage error (they were ignored).
+#[test]
+fn render_choices_without_an_output_are_a_usage_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = write_recording(&dir.path().join("ramp"), &[20.0], Truth::None);
+    for flags in [["--render-every", "2"], ["--render-frame", "0"]] {
+        let mut args = vec![path_str(&rec)];
+        args.extend(flags);
+        let out = eval(&args);
+        assert_eq!(out.code, Some(2), "{flags:?}: {}", out.stderr);
+        assert!(out.stdout.is_empty(), "{}", out.stdout);
+        assert!(
+            out.stderr.contains("--render <DIR>") && out.stderr.contains("--export-ply <DIR>"),
+            "{flags:?}: {}",
+            out.stderr
+        );
+    }
+    let ply = dir.path().join("ply");
+    let out = eval(&[
+        path_str(&rec),
+        "--render-frame",
+        "0",
+        "--export-ply",
+        path_str(&ply),
+    ]);
+    assert!(out.success, "{}", out.stderr);
 }
 
 #[test]
