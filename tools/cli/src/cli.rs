@@ -7,7 +7,9 @@ use std::path::Path;
 use clap::Args;
 use slope_ipc_types::{ServiceNames, DEFAULT_SERVICE_PREFIX, SERVICE_PREFIX_ENV};
 
-use crate::config_file::{config_path, SlopeFile, DEFAULT_CONFIG_PATH};
+use crate::config_file::{
+    config_path, is_config_error, SlopeFile, DEFAULT_CONFIG_PATH, EXIT_CONFIG,
+};
 use slope_sensor::publish::StopFlag;
 use tracing_subscriber::EnvFilter;
 
@@ -209,6 +211,18 @@ pub fn exit_status(result: anyhow::Result<()>) -> std::process::ExitCode {
             eprintln!("{}", error_report(&err));
             std::process::ExitCode::FAILURE
         }
+    }
+}
+
+/// [`exit_status`] for a daemon that reads the config file: a config-file
+/// error exits with [`EXIT_CONFIG`] (78), which its unit does not restart.
+pub fn daemon_exit_status(result: anyhow::Result<()>) -> std::process::ExitCode {
+    let config = result.as_ref().err().is_some_and(is_config_error);
+    let status = exit_status(result);
+    if config {
+        std::process::ExitCode::from(EXIT_CONFIG)
+    } else {
+        status
     }
 }
 
