@@ -53,20 +53,41 @@ impl LogArgs {
 pub struct CommonArgs {
     /// Prefix of the iceoryx2 service names (`<prefix>/cloud`,
     /// `<prefix>/estimate`). Processes talk to each other only when they
-    /// share it; tests use a unique one each. Default: `service_prefix` of
-    /// the config file (/etc/slope/slope.toml, or a daemon's --config),
-    /// else "slope".
+    /// share it; tests use a unique one each. Default: the environment
+    /// variable SLOPE_SERVICE_PREFIX, else `service_prefix` of the config
+    /// file (--config, else /etc/slope/slope.toml if it exists), else "slope".
+    // Not clap's `env`: clap counts a value from the environment as given
+    // on the command line and prints it in the usage line of every error
+    // (`Usage: slope-replay --service-prefix <SERVICE_PREFIX> <RECORDING>`)
+    // as if it were required. A default is not printed there, and is
+    // checked by `prefix_arg` all the same.
     #[arg(
         long,
-        env = SERVICE_PREFIX_ENV,
         global = true,
-        value_parser = prefix_arg
+        value_parser = prefix_arg,
+        default_value = prefix_from_env(),
+        hide_default_value = true
     )]
     pub service_prefix: Option<String>,
 
     #[command(flatten)]
     pub log: LogArgs,
 }
+
+/// [`SERVICE_PREFIX_ENV`], read once, as the default of `--service-prefix`.
+fn prefix_from_env() -> Option<&'static str> {
+    static PREFIX: std::sync::OnceLock<Option<String>> = std::sync::OnceLock::new();
+    PREFIX
+        .get_or_init(|| std::env::var(SERVICE_PREFIX_ENV).ok())
+        .as_deref()
+}
+
+/// `--service-prefix` of the clients without --config (`slope-echo`,
+/// `slope-record`).
+pub const CLIENT_PREFIX_HELP: &str = "Prefix of the iceoryx2 service names (`<prefix>/cloud`, \
+`<prefix>/estimate`). Processes talk to each other only when they share it; tests use a unique \
+one each. Default: the environment variable SLOPE_SERVICE_PREFIX, else `service_prefix` of \
+/etc/slope/slope.toml (the daemons' config file) if it exists, else \"slope\"";
 
 impl CommonArgs {
     /// A client's service names (`slope-echo`, `slope-record`): the prefix

@@ -24,7 +24,7 @@ use slope_sensor::recording::{
 };
 use slope_sensor::source::{FrameSource, SourceFrame, SourceInfo};
 
-use crate::cli::{max_frames_arg, node_name, require_output, CommonArgs};
+use crate::cli::{max_frames_arg, node_name, require_output, CommonArgs, CLIENT_PREFIX_HELP};
 use crate::mcap_export::{McapExporter, McapFrame};
 use crate::mount_args::MountArgs;
 use crate::replay::positive_f64;
@@ -78,6 +78,8 @@ impl From<Compression> for PngCompression {
 
 #[derive(Debug, Parser)]
 #[command(
+    // It has no --config: the daemons' file only.
+    mut_arg("service_prefix", |arg| arg.help(CLIENT_PREFIX_HELP)),
     name = "slope-record",
     // The output is required (checked by `RecordArgs::parse_checked`, to
     // say how to give it), which the derived usage cannot know.
