@@ -61,9 +61,15 @@ pub struct ReplayArgs {
     #[arg(long, default_value_t = 0, value_parser = wait_subscribers_arg)]
     pub wait_subscribers: usize,
 
-    /// Give up (non-zero exit) if the subscribers are not there after this
-    /// many seconds; waits forever when not given.
-    #[arg(long = "wait-timeout-s", alias = "wait-timeout", value_parser = positive_f64)]
+    /// Give up (non-zero exit) if the --wait-subscribers are not there after
+    /// this many seconds; waits forever when not given. Needs
+    /// --wait-subscribers (without it nothing is waited for).
+    #[arg(
+        long = "wait-timeout-s",
+        alias = "wait-timeout",
+        value_parser = positive_f64,
+        requires = "wait_subscribers"
+    )]
     pub wait_timeout: Option<f64>,
 
     /// Skip frames whose images are missing or broken (with a warning)
@@ -172,4 +178,20 @@ fn wait_subscribers_arg(text: &str) -> Result<usize, String> {
         ));
     }
     Ok(n)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_wait_timeout_needs_wait_subscribers() {
+        let parse =
+            |args: &[&str]| ReplayArgs::try_parse_from(["slope-replay", "rec"].iter().chain(args));
+        let err = parse(&["--wait-timeout-s", "1"]).expect_err("nothing to wait for");
+        assert_eq!(err.kind(), clap::error::ErrorKind::MissingRequiredArgument);
+        assert!(err.to_string().contains("--wait-subscribers"), "{err}");
+        let args = parse(&["--wait-timeout-s", "1", "--wait-subscribers", "1"]).expect("valid");
+        assert_eq!(args.wait_timeout, Some(1.0));
+    }
 }
