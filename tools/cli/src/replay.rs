@@ -73,7 +73,8 @@ pub struct ReplayArgs {
     pub wait_timeout: Option<f64>,
 
     /// Skip frames whose images are missing or broken (with a warning)
-    /// instead of stopping with an error.
+    /// instead of stopping with an error. A recording none of whose frames
+    /// can be read is still an error.
     #[arg(long)]
     pub skip_bad_frames: bool,
 
@@ -143,6 +144,13 @@ pub fn run(args: &ReplayArgs, stop: &StopFlag) -> anyhow::Result<PublishStats> {
         skip_bad_frames: args.skip_bad_frames,
     };
     let stats = publish_stream(&mut source, &publisher, &options, stop)?;
+    if stats.published == 0 && !stats.stopped {
+        anyhow::bail!(
+            "cannot replay {}: no frame could be read ({} skipped as bad)",
+            args.recording.display(),
+            stats.skipped_bad
+        );
+    }
     if !stats.stopped {
         // Leaving at once would take the last samples with us before a
         // subscriber that is still connecting could read them.
