@@ -155,11 +155,34 @@ pub fn count_arg(text: &str, zero: &str) -> Result<u64, String> {
     }
 }
 
-/// A service prefix: non-empty, printable, without surrounding slashes.
+/// The longest service prefix, in bytes: iceoryx2's longest service name
+/// less the longest `/<suffix>` the prefix gets (`/estimate`), so that
+/// every service name made from it is valid.
+pub fn max_prefix_len() -> usize {
+    let suffixes = ServiceNames::new(String::new());
+    let longest_suffix = [suffixes.cloud(), suffixes.estimate(), suffixes.health()]
+        .iter()
+        .map(String::len)
+        .max()
+        .unwrap_or(0);
+    iceoryx2::constants::MAX_SERVICE_NAME_LENGTH.saturating_sub(longest_suffix)
+}
+
+/// A service prefix: non-empty, at most [`max_prefix_len`] bytes,
+/// printable, without surrounding slashes.
 pub fn prefix_arg(text: &str) -> Result<String, String> {
     if text.is_empty() {
         return Err(format!(
             "the service prefix is empty (check {SERVICE_PREFIX_ENV}); the default is '{DEFAULT_SERVICE_PREFIX}'"
+        ));
+    }
+    let max = max_prefix_len();
+    if text.len() > max {
+        return Err(format!(
+            "the service prefix is {} bytes long; it may have at most {max} (iceoryx2's service \
+             names have at most {} bytes, and the prefix gets /estimate added)",
+            text.len(),
+            iceoryx2::constants::MAX_SERVICE_NAME_LENGTH
         ));
     }
     if text.starts_with('/') || text.ends_with('/') || text.chars().any(char::is_control) {
@@ -367,6 +390,23 @@ mod tests {
             service_prefix: prefix.map(str::to_string),
             log: LogArgs::default(),
         }
+    }
+
+    /// The longest prefix makes valid service names; one byte more is
+    /// refused by the parser, naming the limit.
+    #[test]
+    fn a_too_long_prefix_is_refused_with_the_limit() {
+        let max = max_prefix_len();
+        assert!(max > 200, "{max}");
+        let longest = "p".repeat(max);
+        let names = ServiceNames::new(prefix_arg(&longest).expect("fits"));
+        for name in [names.cloud(), names.estimate(), names.health()] {
+            iceoryx2::prelude::ServiceName::new(&name).expect("a valid service name");
+        }
+        let err = prefix_arg(&"p".repeat(max + 1)).expect_err("too long");
+        assert!(err.contains(&format!("at most {max}")), "{err}");
+        let err = prefix_arg(&"p".repeat(300)).expect_err("too long");
+        assert!(err.contains("300 bytes"), "{err}");
     }
 
     #[test]
