@@ -92,6 +92,17 @@ if ! output=$(systemd-analyze verify --root="$root" "${units[@]}" 2>&1) || [ -n 
     fail "systemd-analyze verify: ${output:-failed}"
 fi
 
+# A daemon whose config file is wrong exits 78 (EX_CONFIG); its unit must not
+# restart it forever.
+for unit in "${units[@]}"; do
+    case "$unit" in
+    *.service)
+        grep -qx 'RestartPreventExitStatus=78' "$root/usr/lib/systemd/system/$unit" ||
+            fail "$unit lacks RestartPreventExitStatus=78 (a config error would restart forever)"
+        ;;
+    esac
+done
+
 # The sysusers and tmpfiles entries parse and do what the units need, in the
 # unpacked root (its /etc/passwd, /etc/group and /tmp): the user and group slope,
 # /tmp/iceoryx2.

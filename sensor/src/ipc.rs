@@ -13,7 +13,7 @@ use std::fmt::Debug;
 use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::Publisher;
-use iceoryx2::port::subscriber::Subscriber;
+use iceoryx2::port::subscriber::{Subscriber, SubscriberCreateError};
 use iceoryx2::prelude::*;
 use iceoryx2::sample::Sample;
 use iceoryx2::service::port_factory::event::PortFactory as EventFactory;
@@ -365,9 +365,11 @@ struct TopicSubscriber<
 impl<Payload: Debug + IceoryxSend + ?Sized + 'static, Header: Debug + ZeroCopySend>
     TopicSubscriber<Payload, Header>
 {
+    /// Subscribes to `name`, a topic that takes at most `max_subscribers`.
     fn create(
         node: &Node<ipc::Service>,
         name: String,
+        max_subscribers: usize,
         service: impl FnOnce(
             &Node<ipc::Service>,
             &str,
@@ -379,7 +381,18 @@ impl<Payload: Debug + IceoryxSend + ?Sized + 'static, Header: Debug + ZeroCopySe
         let subscriber = service(node, &name)?
             .subscriber_builder()
             .create()
-            .map_err(|e| IpcError::new("create a subscriber", &name, e))?;
+            .map_err(|e| match e {
+                SubscriberCreateError::ExceedsMaxSupportedSubscribers => IpcError {
+                    action: "create a subscriber",
+                    service: name.clone(),
+                    detail: format!(
+                        "the topic takes at most {max_subscribers} subscribers at once and has \
+                         that many: stop one (a slope-echo or slope-record left running?) or \
+                         wait until one ends"
+                    ),
+                },
+                e => IpcError::new("create a subscriber", &name, e),
+            })?;
         Ok(Self {
             subscriber,
             listener,
@@ -396,7 +409,12 @@ pub struct CloudSubscriber {
 impl CloudSubscriber {
     pub fn create(node: &Node<ipc::Service>, names: &ServiceNames) -> Result<Self, IpcError> {
         Ok(Self {
-            topic: TopicSubscriber::create(node, names.cloud(), cloud_service)?,
+            topic: TopicSubscriber::create(
+                node,
+                names.cloud(),
+                CLOUD_MAX_SUBSCRIBERS,
+                cloud_service,
+            )?,
         })
     }
 
@@ -489,7 +507,12 @@ pub struct EstimateSubscriber {
 impl EstimateSubscriber {
     pub fn create(node: &Node<ipc::Service>, names: &ServiceNames) -> Result<Self, IpcError> {
         Ok(Self {
-            topic: TopicSubscriber::create(node, names.estimate(), estimate_service)?,
+            topic: TopicSubscriber::create(
+                node,
+                names.estimate(),
+                ESTIMATE_MAX_SUBSCRIBERS,
+                estimate_service,
+            )?,
         })
     }
 
@@ -557,7 +580,12 @@ pub struct HealthSubscriber {
 impl HealthSubscriber {
     pub fn create(node: &Node<ipc::Service>, names: &ServiceNames) -> Result<Self, IpcError> {
         Ok(Self {
-            topic: TopicSubscriber::create(node, names.health(), health_service)?,
+            topic: TopicSubscriber::create(
+                node,
+                names.health(),
+                HEALTH_MAX_SUBSCRIBERS,
+                health_service,
+            )?,
         })
     }
 
@@ -571,5 +599,31 @@ impl HealthSubscriber {
             .receive()
             .map(|s| s.map(|sample| *sample.payload()))
             .map_err(|e| IpcError::new("receive a health report", &self.topic.name, e))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// One subscriber too many is refused with the topic's limit and what
+    /// to do, not iceoryx2's bare `ExceedsMaxSupportedSubscribers`.
+    #[test]
+    fn one_subscriber_too_many_is_told_the_limit() {
+        let prefix = format!("slope-test-ipc-limit-{}", std::process::id());
+        let names = ServiceNames::new(prefix);
+        let node = create_node(&format!("ipc-limit-{}", std::process::id())).expect("node");
+        let subscribers: Vec<HealthSubscriber> = (0..HEALTH_MAX_SUBSCRIBERS)
+            .map(|_| HealthSubscriber::create(&node, &names).expect("within the limit"))
+            .collect();
+        let err = match HealthSubscriber::create(&node, &names) {
+            Ok(_) => panic!("{} subscribers accepted", subscribers.len() + 1),
+            Err(err) => err.to_string(),
+        };
+        assert!(
+            err.contains(&format!("at most {HEALTH_MAX_SUBSCRIBERS} subscribers")),
+            "{err}"
+        );
+        assert!(err.contains("/health"), "{err}");
     }
 }

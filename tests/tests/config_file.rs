@@ -132,3 +132,55 @@ fn a_flag_wins_over_the_file() {
     let estimate: Value = serde_json::from_str(&line).expect("JSON");
     assert_eq!(estimate["method"], "tls", "{estimate}");
 }
+
+/// Runs `program` with `--config` on a file holding `text`; its exit status
+/// (within 20 s) and stderr.
+fn run_with_config(program: &str, text: &str, extra: &[&str]) -> (Option<i32>, String) {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("slope.toml");
+    std::fs::write(&path, text).expect("write the config file");
+    let prefix = unique_prefix("config-bad");
+    let mut args = vec![
+        "--config",
+        path.to_str().expect("utf-8 path"),
+        "--service-prefix",
+        prefix.as_str(),
+    ];
+    args.extend_from_slice(extra);
+    let mut proc = Proc::spawn(program, args);
+    let status = proc.wait_exit(deadline(20.0));
+    let stderr = proc.diagnostics();
+    (status.and_then(|s| s.code()), stderr)
+}
+
+/// A typo, a value out of range and an unreadable file in the config file
+/// exit with EX_CONFIG (78), which the units do not restart
+/// (`RestartPreventExitStatus=78`), and say what is wrong.
+#[test]
+fn a_bad_config_file_exits_with_ex_config() {
+    let rec = recording("ramp16");
+    let rec = rec.to_str().expect("utf-8 path");
+    let cases: [(&str, &str); 3] = [
+        ("[capture]\npipelin = \"cpu\"\n", "pipelin"),
+        ("[mount]\npitch_deg = -95\n", "mount.pitch_deg"),
+        ("[estimator\n", "not TOML"),
+    ];
+    for (program, extra) in [("slope-estimator", &[][..]), ("slope-replay", &[rec][..])] {
+        for (text, named) in cases {
+            let (code, stderr) = run_with_config(program, text, extra);
+            assert_eq!(code, Some(78), "{program} on {text:?}\n{stderr}");
+            assert!(stderr.contains(named), "{program} on {text:?}\n{stderr}");
+        }
+    }
+    let mut missing = Proc::spawn(
+        "slope-estimator",
+        ["--config", "/nonexistent/slope.toml", "--print-config"],
+    );
+    let status = missing.wait_exit(deadline(20.0));
+    assert_eq!(
+        status.and_then(|s| s.code()),
+        Some(78),
+        "{}",
+        missing.diagnostics()
+    );
+}

@@ -438,3 +438,68 @@ fn iceoryx2_files_are_not_writable_by_other_users() {
         proc.assert_exits_zero_within(Duration::from_secs(2));
     }
 }
+
+/// Copies the bundled recording `name` into `to` with every depth image
+/// replaced by bytes that are no PNG.
+fn copy_with_broken_depth(name: &str, to: &Path) {
+    let from = recording(name);
+    for entry in walk(&from) {
+        let relative = entry.strip_prefix(&from).expect("inside the recording");
+        let target = to.join(relative);
+        std::fs::create_dir_all(target.parent().expect("a parent")).expect("mkdir");
+        if relative.starts_with("depth") {
+            std::fs::write(&target, b"not a png").expect("write");
+        } else {
+            std::fs::copy(&entry, &target).expect("copy");
+        }
+    }
+}
+
+/// Every file under `dir`.
+fn walk(dir: &Path) -> Vec<PathBuf> {
+    let mut files = Vec::new();
+    for entry in std::fs::read_dir(dir).expect("read_dir") {
+        let path = entry.expect("entry").path();
+        if path.is_dir() {
+            files.extend(walk(&path));
+        } else {
+            files.push(path);
+        }
+    }
+    files
+}
+
+/// `--skip-bad-frames` (with and without `--loop`) on a recording none of
+/// whose frames can be read publishes nothing: that is a failure, not a
+/// replay that went well.
+#[test]
+fn a_replay_with_no_readable_frame_fails() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let broken = dir.path().join("broken");
+    copy_with_broken_depth("ramp16", &broken);
+    let prefix = unique_prefix("replay-unreadable");
+    for looping in [true, false] {
+        let mut args = vec![
+            broken.to_str().expect("utf-8 path"),
+            "--skip-bad-frames",
+            "--rate",
+            "1000",
+            "--service-prefix",
+            prefix.as_str(),
+        ];
+        if looping {
+            args.push("--loop");
+        }
+        let mut replay = Proc::spawn("slope-replay", args);
+        let status = replay.wait_exit(deadline(20.0));
+        let diagnostics = replay.diagnostics();
+        assert!(
+            status.is_some_and(|s| !s.success()),
+            "loop {looping}: {status:?}\n{diagnostics}"
+        );
+        assert!(
+            diagnostics.contains("no frame could be read"),
+            "{diagnostics}"
+        );
+    }
+}

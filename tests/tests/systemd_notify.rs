@@ -81,3 +81,47 @@ fn the_estimator_speaks_the_notify_protocol() {
         estimator.diagnostics()
     );
 }
+
+/// A config-file error under systemd: `STATUS=failed: <reason>` naming the
+/// bad key, then exit status 78 (EX_CONFIG), which the unit does not
+/// restart.
+#[test]
+fn a_config_error_says_failed_to_systemd() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("notify.sock");
+    let socket = UnixDatagram::bind(&path).expect("bind the notify socket");
+    socket
+        .set_read_timeout(Some(Duration::from_millis(100)))
+        .expect("timeout");
+    let config = dir.path().join("slope.toml");
+    std::fs::write(&config, "[estimator]\nmethd = \"tls\"\n").expect("write the config file");
+    let prefix = unique_prefix("notify-config");
+    let mut estimator = Proc::spawn_with_env(
+        "slope-estimator",
+        [
+            "--config",
+            config.to_str().expect("utf-8 path"),
+            "--service-prefix",
+            prefix.as_str(),
+        ],
+        &[("NOTIFY_SOCKET", path.to_str().expect("utf-8 path"))],
+    );
+    let mut seen = Vec::new();
+    assert!(
+        read_notify_until(&socket, &mut seen, "STATUS=failed: ", deadline(20.0)),
+        "{seen:?}\n{}",
+        estimator.diagnostics()
+    );
+    let failed = seen
+        .iter()
+        .find(|m| m.starts_with("STATUS=failed: "))
+        .expect("seen");
+    assert!(failed.contains("methd"), "{failed}");
+    let exit = estimator.wait_exit(deadline(10.0));
+    assert_eq!(
+        exit.and_then(|s| s.code()),
+        Some(78),
+        "{}",
+        estimator.diagnostics()
+    );
+}

@@ -20,7 +20,7 @@ use slope_sensor::source::FrameSource;
 use crate::capture_notify::{publish_notifying, CaptureNotifier, SharedNotifier, SourceCounters};
 
 use crate::cli::{max_frames_arg, node_name, CommonArgs};
-use crate::config_file::{config_path, SlopeFile, DEFAULT_CONFIG_PATH};
+use crate::config_file::{config_path, is_config_error, SlopeFile, DEFAULT_CONFIG_PATH};
 use crate::estimator::health_interval_arg;
 use crate::health::HealthReporter;
 use crate::mount_args::MountArgs;
@@ -273,11 +273,11 @@ fn firmware_of(context: &Freenect2, lock_dir: &Path, serial: &str) -> String {
     }
 }
 
-/// Exit status for failures that restarting cannot cure (a depth pipeline
-/// that is not built in or cannot initialise): `EX_CONFIG` (78), so that a
-/// unit with `RestartPreventExitStatus=78` stays failed instead of
-/// restarting every few seconds.
-pub const EXIT_CONFIG: u8 = 78;
+/// Exit status for failures that restarting cannot cure (a config-file
+/// error, a depth pipeline that is not built in or cannot initialise):
+/// `EX_CONFIG` (78), so that a unit with `RestartPreventExitStatus=78` stays
+/// failed instead of restarting every few seconds.
+pub use crate::config_file::EXIT_CONFIG;
 
 /// [`EXIT_CONFIG`] when `err` is a failure that restarting cannot cure.
 pub fn config_exit_code(err: &anyhow::Error) -> Option<u8> {
@@ -290,15 +290,14 @@ pub fn config_exit_code(err: &anyhow::Error) -> Option<u8> {
             Kinect2Error::DepthPipelineFailed { .. } | Kinect2Error::PipelineUnavailable { .. }
         )
     };
-    err.chain()
-        .any(|cause| {
-            cause.downcast_ref::<Kinect2Error>().is_some_and(lasting)
-                || matches!(
-                    cause.downcast_ref::<PublishError>(),
-                    Some(PublishError::Source(SourceError::Kinect2(inner))) if lasting(inner)
-                )
-        })
-        .then_some(EXIT_CONFIG)
+    let broken_pipeline = err.chain().any(|cause| {
+        cause.downcast_ref::<Kinect2Error>().is_some_and(lasting)
+            || matches!(
+                cause.downcast_ref::<PublishError>(),
+                Some(PublishError::Source(SourceError::Kinect2(inner))) if lasting(inner)
+            )
+    });
+    (is_config_error(err) || broken_pipeline).then_some(EXIT_CONFIG)
 }
 
 /// The counters of the status line.
@@ -501,6 +500,10 @@ mod tests {
             libfreenect2_log: None,
         });
         assert_eq!(config_exit_code(&lost), None);
+        let typo = SlopeFile::from_toml_str("[capture]\npipelin = \"cpu\"\n")
+            .map_err(anyhow::Error::new)
+            .expect_err("unknown key");
+        assert_eq!(config_exit_code(&typo), Some(EXIT_CONFIG));
     }
 
     #[test]

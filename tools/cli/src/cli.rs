@@ -7,7 +7,9 @@ use std::path::Path;
 use clap::Args;
 use slope_ipc_types::{ServiceNames, DEFAULT_SERVICE_PREFIX, SERVICE_PREFIX_ENV};
 
-use crate::config_file::{config_path, SlopeFile, DEFAULT_CONFIG_PATH};
+use crate::config_file::{
+    config_path, is_config_error, SlopeFile, DEFAULT_CONFIG_PATH, EXIT_CONFIG,
+};
 use slope_sensor::publish::StopFlag;
 use tracing_subscriber::EnvFilter;
 
@@ -51,20 +53,41 @@ impl LogArgs {
 pub struct CommonArgs {
     /// Prefix of the iceoryx2 service names (`<prefix>/cloud`,
     /// `<prefix>/estimate`). Processes talk to each other only when they
-    /// share it; tests use a unique one each. Default: `service_prefix` of
-    /// the config file (/etc/slope/slope.toml, or a daemon's --config),
-    /// else "slope".
+    /// share it; tests use a unique one each. Default: the environment
+    /// variable SLOPE_SERVICE_PREFIX, else `service_prefix` of the config
+    /// file (--config, else /etc/slope/slope.toml if it exists), else "slope".
+    // Not clap's `env`: clap counts a value from the environment as given
+    // on the command line and prints it in the usage line of every error
+    // (`Usage: slope-replay --service-prefix <SERVICE_PREFIX> <RECORDING>`)
+    // as if it were required. A default is not printed there, and is
+    // checked by `prefix_arg` all the same.
     #[arg(
         long,
-        env = SERVICE_PREFIX_ENV,
         global = true,
-        value_parser = prefix_arg
+        value_parser = prefix_arg,
+        default_value = prefix_from_env(),
+        hide_default_value = true
     )]
     pub service_prefix: Option<String>,
 
     #[command(flatten)]
     pub log: LogArgs,
 }
+
+/// [`SERVICE_PREFIX_ENV`], read once, as the default of `--service-prefix`.
+fn prefix_from_env() -> Option<&'static str> {
+    static PREFIX: std::sync::OnceLock<Option<String>> = std::sync::OnceLock::new();
+    PREFIX
+        .get_or_init(|| std::env::var(SERVICE_PREFIX_ENV).ok())
+        .as_deref()
+}
+
+/// `--service-prefix` of the clients without --config (`slope-echo`,
+/// `slope-record`).
+pub const CLIENT_PREFIX_HELP: &str = "Prefix of the iceoryx2 service names (`<prefix>/cloud`, \
+`<prefix>/estimate`). Processes talk to each other only when they share it; tests use a unique \
+one each. Default: the environment variable SLOPE_SERVICE_PREFIX, else `service_prefix` of \
+/etc/slope/slope.toml (the daemons' config file) if it exists, else \"slope\"";
 
 impl CommonArgs {
     /// A client's service names (`slope-echo`, `slope-record`): the prefix
@@ -132,11 +155,34 @@ pub fn count_arg(text: &str, zero: &str) -> Result<u64, String> {
     }
 }
 
-/// A service prefix: non-empty, printable, without surrounding slashes.
+/// The longest service prefix, in bytes: iceoryx2's longest service name
+/// less the longest `/<suffix>` the prefix gets (`/estimate`), so that
+/// every service name made from it is valid.
+pub fn max_prefix_len() -> usize {
+    let suffixes = ServiceNames::new(String::new());
+    let longest_suffix = [suffixes.cloud(), suffixes.estimate(), suffixes.health()]
+        .iter()
+        .map(String::len)
+        .max()
+        .unwrap_or(0);
+    iceoryx2::constants::MAX_SERVICE_NAME_LENGTH.saturating_sub(longest_suffix)
+}
+
+/// A service prefix: non-empty, at most [`max_prefix_len`] bytes,
+/// printable, without surrounding slashes.
 pub fn prefix_arg(text: &str) -> Result<String, String> {
     if text.is_empty() {
         return Err(format!(
             "the service prefix is empty (check {SERVICE_PREFIX_ENV}); the default is '{DEFAULT_SERVICE_PREFIX}'"
+        ));
+    }
+    let max = max_prefix_len();
+    if text.len() > max {
+        return Err(format!(
+            "the service prefix is {} bytes long; it may have at most {max} (iceoryx2's service \
+             names have at most {} bytes, and the prefix gets /estimate added)",
+            text.len(),
+            iceoryx2::constants::MAX_SERVICE_NAME_LENGTH
         ));
     }
     if text.starts_with('/') || text.ends_with('/') || text.chars().any(char::is_control) {
@@ -209,6 +255,18 @@ pub fn exit_status(result: anyhow::Result<()>) -> std::process::ExitCode {
             eprintln!("{}", error_report(&err));
             std::process::ExitCode::FAILURE
         }
+    }
+}
+
+/// [`exit_status`] for a daemon that reads the config file: a config-file
+/// error exits with [`EXIT_CONFIG`] (78), which its unit does not restart.
+pub fn daemon_exit_status(result: anyhow::Result<()>) -> std::process::ExitCode {
+    let config = result.as_ref().err().is_some_and(is_config_error);
+    let status = exit_status(result);
+    if config {
+        std::process::ExitCode::from(EXIT_CONFIG)
+    } else {
+        status
     }
 }
 
@@ -332,6 +390,23 @@ mod tests {
             service_prefix: prefix.map(str::to_string),
             log: LogArgs::default(),
         }
+    }
+
+    /// The longest prefix makes valid service names; one byte more is
+    /// refused by the parser, naming the limit.
+    #[test]
+    fn a_too_long_prefix_is_refused_with_the_limit() {
+        let max = max_prefix_len();
+        assert!(max > 200, "{max}");
+        let longest = "p".repeat(max);
+        let names = ServiceNames::new(prefix_arg(&longest).expect("fits"));
+        for name in [names.cloud(), names.estimate(), names.health()] {
+            iceoryx2::prelude::ServiceName::new(&name).expect("a valid service name");
+        }
+        let err = prefix_arg(&"p".repeat(max + 1)).expect_err("too long");
+        assert!(err.contains(&format!("at most {max}")), "{err}");
+        let err = prefix_arg(&"p".repeat(300)).expect_err("too long");
+        assert!(err.contains("300 bytes"), "{err}");
     }
 
     #[test]

@@ -43,6 +43,18 @@ use crate::replay::POSITIVE_RANGE;
 /// Debian package installs it, every key commented out).
 pub const DEFAULT_CONFIG_PATH: &str = "/etc/slope/slope.toml";
 
+/// Exit status of a daemon whose settings are wrong (an unreadable config
+/// file, a parse error, an unknown key, a value out of range): `EX_CONFIG`
+/// from sysexits.h. The units say `RestartPreventExitStatus=78`, so that a
+/// typo in the file leaves the unit failed instead of restarting it forever.
+pub const EXIT_CONFIG: u8 = 78;
+
+/// Whether `err` is (or was caused by) a config-file error: see
+/// [`EXIT_CONFIG`].
+pub fn is_config_error(err: &anyhow::Error) -> bool {
+    err.chain().any(|cause| cause.is::<ConfigFileError>())
+}
+
 /// The depth decoding pipelines `[capture] pipeline` names.
 pub const PIPELINES: [&str; 7] = ["default", "cpu", "cl", "clkde", "cuda", "cudakde", "gl"];
 

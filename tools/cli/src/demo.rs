@@ -27,6 +27,16 @@ use crate::replay::positive_f64;
 /// (default: the directory of the running executable).
 pub const BIN_DIR_ENV: &str = "SLOPE_BIN_DIR";
 
+impl DemoArgs {
+    /// `--recording DIR` or `DIR`, else [`bundled_recording`].
+    pub fn recording_dir(&self) -> PathBuf {
+        self.recording
+            .clone()
+            .or_else(|| self.recording_positional.clone())
+            .unwrap_or_else(bundled_recording)
+    }
+}
+
 /// The bundled recording the demo plays when given none.
 pub fn bundled_recording() -> PathBuf {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/recordings/ramp16");
@@ -53,14 +63,20 @@ arrived so far, also before the first estimate; the exit status is then 0.",
     after_help = "Examples:
   slope-demo                                   # bundled 16° ramp, paper method
   slope-demo --method least-squares            # the baseline instead
-  slope-demo --recording ../shared/data/kinect2-stairs-front
+  slope-demo ../shared/data/kinect2-stairs-front   # or --recording DIR
   slope-demo --rate 5                          # slower than the recorded 30 Hz"
 )]
 pub struct DemoArgs {
     /// Recording to play (default: the bundled 16° ramp in the source
-    /// checkout's tests/recordings/ramp16; installed binaries need this flag).
+    /// checkout's tests/recordings/ramp16; installed binaries need this flag
+    /// or the RECORDING argument).
     #[arg(long)]
     pub recording: Option<PathBuf>,
+
+    /// The same as --recording, given without the flag (as every other
+    /// program takes a recording).
+    #[arg(value_name = "RECORDING", conflicts_with = "recording")]
+    pub recording_positional: Option<PathBuf>,
 
     /// Estimator method: paper, least-squares or tls.
     #[arg(long, value_parser = method_arg, default_value = "paper")]
@@ -207,7 +223,7 @@ fn line_for(estimate: &SlopeEstimate, truth: Option<f64>) -> String {
 }
 
 pub fn run(args: &DemoArgs, stop: &StopFlag) -> anyhow::Result<DemoSummary> {
-    let recording_dir = args.recording.clone().unwrap_or_else(bundled_recording);
+    let recording_dir = args.recording_dir();
     let recording = Recording::open(&recording_dir)
         .with_context(|| format!("cannot open the demo recording {}", recording_dir.display()))?;
     let truths: HashMap<u64, Option<f64>> = recording
@@ -365,5 +381,22 @@ mod tests {
         assert_eq!(median(&mut []), None);
         assert_eq!(median(&mut [3.0, 1.0, 2.0]), Some(2.0));
         assert_eq!(median(&mut [4.0, 1.0, 3.0, 2.0]), Some(2.5));
+    }
+
+    #[test]
+    fn the_recording_is_taken_with_or_without_the_flag() {
+        let parse = |args: &[&str]| DemoArgs::try_parse_from(["slope-demo"].iter().chain(args));
+        let positional = parse(&["tests/recordings/ramp16"]).expect("positional");
+        assert_eq!(
+            positional.recording_dir(),
+            Path::new("tests/recordings/ramp16")
+        );
+        let flag = parse(&["--recording", "rec"]).expect("flag");
+        assert_eq!(flag.recording_dir(), Path::new("rec"));
+        assert_eq!(
+            parse(&[]).expect("none").recording_dir(),
+            bundled_recording()
+        );
+        assert!(parse(&["a", "--recording", "b"]).is_err(), "two recordings");
     }
 }

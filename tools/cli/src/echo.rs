@@ -9,12 +9,16 @@ use slope_ipc_types::{EstimateStatus, Health, SlopeEstimate, TimingStats};
 use slope_sensor::ipc::{create_node, EstimateSubscriber, HealthSubscriber, TopicListener};
 use slope_sensor::publish::StopFlag;
 
-use crate::cli::{max_frames_arg, node_name, wait_loop, CommonArgs, SilenceNote};
+use crate::cli::{
+    max_frames_arg, node_name, wait_loop, CommonArgs, SilenceNote, CLIENT_PREFIX_HELP,
+};
 use crate::health::summary_line;
 use crate::replay::positive_f64;
 
 #[derive(Debug, Parser)]
 #[command(
+    // It has no --config: the daemons' file only.
+    mut_arg("service_prefix", |arg| arg.help(CLIENT_PREFIX_HELP)),
     name = "slope-echo",
     version,
     about = "Print slope estimates from the estimate topic (or health reports), one line each",

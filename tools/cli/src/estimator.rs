@@ -136,7 +136,25 @@ pub struct EstimatorStats {
     pub dropped: u64,
 }
 
+/// Runs the estimator as a systemd notify daemon: `READY=1` once subscribed,
+/// a status line a second, `STATUS=failed: <reason>` before a failed exit
+/// (a config-file error included) and `STOPPING=1` on the way out. Outside
+/// systemd the notifications go nowhere.
 pub fn run(args: &EstimatorArgs, stop: &StopFlag) -> anyhow::Result<EstimatorStats> {
+    let mut manager = ServiceManager::from_env();
+    let result = estimate(args, stop, &mut manager);
+    if let Err(err) = &result {
+        manager.status(&format!("failed: {err:#}").replace('\n', " "));
+    }
+    manager.stopping();
+    result
+}
+
+fn estimate(
+    args: &EstimatorArgs,
+    stop: &StopFlag,
+    manager: &mut ServiceManager,
+) -> anyhow::Result<EstimatorStats> {
     let file = effective_config(args)?;
     if args.print_config {
         print!(
@@ -182,7 +200,6 @@ pub fn run(args: &EstimatorArgs, stop: &StopFlag) -> anyhow::Result<EstimatorSta
         subscriber.service_name(),
         "slope-capture or slope-replay",
     );
-    let mut manager = ServiceManager::from_env();
     manager.ready("waiting for clouds");
     let started = Instant::now();
     let result = wait_loop(subscriber.listener(), stop, || {
@@ -196,7 +213,6 @@ pub fn run(args: &EstimatorArgs, stop: &StopFlag) -> anyhow::Result<EstimatorSta
         worker.health.tick();
         Ok(!worker.done())
     });
-    manager.stopping();
     result?;
     tracing::info!(
         processed = worker.stats.processed,

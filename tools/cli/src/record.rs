@@ -24,7 +24,7 @@ use slope_sensor::recording::{
 };
 use slope_sensor::source::{FrameSource, SourceFrame, SourceInfo};
 
-use crate::cli::{max_frames_arg, node_name, require_output, CommonArgs};
+use crate::cli::{max_frames_arg, node_name, require_output, CommonArgs, CLIENT_PREFIX_HELP};
 use crate::mcap_export::{McapExporter, McapFrame};
 use crate::mount_args::MountArgs;
 use crate::replay::positive_f64;
@@ -78,6 +78,8 @@ impl From<Compression> for PngCompression {
 
 #[derive(Debug, Parser)]
 #[command(
+    // It has no --config: the daemons' file only.
+    mut_arg("service_prefix", |arg| arg.help(CLIENT_PREFIX_HELP)),
     name = "slope-record",
     // The output is required (checked by `RecordArgs::parse_checked`, to
     // say how to give it), which the derived usage cannot know.
@@ -94,11 +96,12 @@ is flushed as soon as its images are written, so a recording cut short stays rea
   slope-record -o scene1 --source kinect --mount-pitch-deg -20 --mount-height-m 0.5
   slope-replay scene1                                  # ... and play it back later
   slope-record -o copy --idle-timeout-s 2 & slope-replay REC --wait-subscribers 1
-  slope-record -o run.mcap --format mcap --max-frames 300  # for Foxglove, with the estimates"
+  slope-record -o run.mcap --max-frames 300            # MCAP (from the name), for Foxglove"
 )]
 pub struct RecordArgs {
     /// The recording directory to create (must not exist, or be empty); with
-    /// --format mcap, the MCAP file to create (must not exist).
+    /// --format mcap, or when its name ends in .mcap, the MCAP file to
+    /// create (must not exist).
     #[arg(short = 'o', long = "output", value_name = "PATH")]
     pub output: Option<PathBuf>,
 
@@ -110,8 +113,9 @@ pub struct RecordArgs {
     /// image (/slope/depth, foxglove.RawImage) and the cloud
     /// (/slope/cloud, foxglove.PointCloud), and every estimate published
     /// meanwhile (/slope/estimate, JSON), stamped with the capture time.
-    #[arg(long, value_enum, default_value_t = RecordFormat::Recording)]
-    pub format: RecordFormat,
+    /// Default: mcap when the output's name ends in .mcap, else recording.
+    #[arg(long, value_enum)]
+    pub format: Option<RecordFormat>,
 
     /// Where frames come from.
     #[arg(long, value_enum, default_value_t = RecordSource::Topic)]
@@ -186,6 +190,22 @@ impl RecordArgs {
             OUTPUT_MISSING,
         )?;
         Ok(args)
+    }
+
+    /// `--format`, else mcap for an output named `*.mcap` (a directory
+    /// named so would only be mistaken for an MCAP file), else a recording.
+    pub fn format(&self) -> RecordFormat {
+        self.format.unwrap_or_else(|| {
+            let mcap = self
+                .out_dir()
+                .extension()
+                .is_some_and(|ext| ext.eq_ignore_ascii_case("mcap"));
+            if mcap {
+                RecordFormat::Mcap
+            } else {
+                RecordFormat::Recording
+            }
+        })
     }
 
     /// `-o PATH` (or PATH without the flag).
@@ -423,7 +443,7 @@ impl Sink {
     /// Creates the sink of `args` for clouds described by `info`.
     fn create(args: &RecordArgs, info: &SourceInfo, sensor: &str) -> anyhow::Result<Self> {
         let out = args.out_dir();
-        Ok(match args.format {
+        Ok(match args.format() {
             RecordFormat::Recording => {
                 let mut recording = RecordingWriter::create(out, &meta_for(info, sensor), false)
                     .with_context(|| format!("cannot create the recording {}", out.display()))?;
@@ -455,7 +475,7 @@ pub fn record_topic(
     let node = create_node(&node_name("slope-record"))?;
     let subscriber =
         CloudSubscriber::create(&node, &names).context("cannot subscribe to clouds")?;
-    let estimates = match args.format {
+    let estimates = match args.format() {
         RecordFormat::Mcap => Some(
             EstimateSubscriber::create(&node, &names).context("cannot subscribe to estimates")?,
         ),
@@ -681,7 +701,7 @@ pub fn run(args: &RecordArgs, stop: &StopFlag) -> anyhow::Result<RecordStats> {
         // Say so before touching the output directory.
         return record_kinect(args, &limits, stop);
     }
-    if args.format == RecordFormat::Mcap {
+    if args.format() == RecordFormat::Mcap {
         return record_mcap(args, &limits, stop);
     }
     let created = prepare_out_dir(args.out_dir())?;
@@ -715,8 +735,9 @@ fn record_mcap(
 ) -> anyhow::Result<RecordStats> {
     if args.source != RecordSource::Topic {
         anyhow::bail!(
-            "--format mcap records the cloud topic only: record the Kinect into a recording \
-             (--format recording) and convert it with slope-convert RECORDING OUT.mcap"
+            "an MCAP output (--format mcap, or a name ending in .mcap) records the cloud topic \
+             only: record the Kinect into a recording (--format recording, a directory not named \
+             *.mcap) and convert it with slope-convert RECORDING OUT.mcap"
         );
     }
     let out = args.out_dir();
@@ -756,6 +777,21 @@ mod tests {
     use slope_sensor::projection::Projector;
     use slope_sensor::recording::Recording;
     use slope_sensor::source::RecordingSource;
+
+    #[test]
+    fn an_output_named_mcap_is_an_mcap_file_unless_told_otherwise() {
+        let format = |args: &[&str]| {
+            RecordArgs::try_parse_checked_from(["slope-record"].iter().chain(args))
+                .expect("valid arguments")
+                .format()
+        };
+        assert_eq!(format(&["-o", "new.mcap"]), RecordFormat::Mcap);
+        assert_eq!(format(&["run.MCAP"]), RecordFormat::Mcap);
+        assert_eq!(format(&["-o", "scene1"]), RecordFormat::Recording);
+        assert_eq!(format(&["-o", "x", "--format", "mcap"]), RecordFormat::Mcap);
+        let told = ["-o", "new.mcap", "--format", "recording"];
+        assert_eq!(format(&told), RecordFormat::Recording);
+    }
 
     #[test]
     fn depth_from_a_projected_cloud_is_the_original_to_the_count() {

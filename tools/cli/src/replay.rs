@@ -61,13 +61,20 @@ pub struct ReplayArgs {
     #[arg(long, default_value_t = 0, value_parser = wait_subscribers_arg)]
     pub wait_subscribers: usize,
 
-    /// Give up (non-zero exit) if the subscribers are not there after this
-    /// many seconds; waits forever when not given.
-    #[arg(long = "wait-timeout-s", alias = "wait-timeout", value_parser = positive_f64)]
+    /// Give up (non-zero exit) if the --wait-subscribers are not there after
+    /// this many seconds; waits forever when not given. Needs
+    /// --wait-subscribers (without it nothing is waited for).
+    #[arg(
+        long = "wait-timeout-s",
+        alias = "wait-timeout",
+        value_parser = positive_f64,
+        requires = "wait_subscribers"
+    )]
     pub wait_timeout: Option<f64>,
 
     /// Skip frames whose images are missing or broken (with a warning)
-    /// instead of stopping with an error.
+    /// instead of stopping with an error. A recording none of whose frames
+    /// can be read is still an error.
     #[arg(long)]
     pub skip_bad_frames: bool,
 
@@ -137,6 +144,13 @@ pub fn run(args: &ReplayArgs, stop: &StopFlag) -> anyhow::Result<PublishStats> {
         skip_bad_frames: args.skip_bad_frames,
     };
     let stats = publish_stream(&mut source, &publisher, &options, stop)?;
+    if stats.published == 0 && !stats.stopped {
+        anyhow::bail!(
+            "cannot replay {}: no frame could be read ({} skipped as bad)",
+            args.recording.display(),
+            stats.skipped_bad
+        );
+    }
     if !stats.stopped {
         // Leaving at once would take the last samples with us before a
         // subscriber that is still connecting could read them.
@@ -172,4 +186,20 @@ fn wait_subscribers_arg(text: &str) -> Result<usize, String> {
         ));
     }
     Ok(n)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_wait_timeout_needs_wait_subscribers() {
+        let parse =
+            |args: &[&str]| ReplayArgs::try_parse_from(["slope-replay", "rec"].iter().chain(args));
+        let err = parse(&["--wait-timeout-s", "1"]).expect_err("nothing to wait for");
+        assert_eq!(err.kind(), clap::error::ErrorKind::MissingRequiredArgument);
+        assert!(err.to_string().contains("--wait-subscribers"), "{err}");
+        let args = parse(&["--wait-timeout-s", "1", "--wait-subscribers", "1"]).expect("valid");
+        assert_eq!(args.wait_timeout, Some(1.0));
+    }
 }

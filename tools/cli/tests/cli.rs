@@ -266,3 +266,53 @@ fn the_estimator_prints_the_configuration_in_effect() {
         assert!(stderr.contains(path), "the file is named: {stderr}");
     }
 }
+
+/// With SLOPE_SERVICE_PREFIX set, a usage error's usage line shows only
+/// what the program needs, not `--service-prefix <SERVICE_PREFIX>` as if
+/// it were required; a bad value in the variable is still refused.
+#[test]
+fn the_prefix_from_the_environment_is_not_in_the_usage_line() {
+    let cases = [
+        (env!("CARGO_BIN_EXE_slope-replay"), &[][..]),
+        (env!("CARGO_BIN_EXE_slope-record"), &["--bogus"][..]),
+    ];
+    for (bin, args) in cases {
+        let output = Command::new(bin)
+            .args(args)
+            .env("SLOPE_SERVICE_PREFIX", "robot9")
+            .output()
+            .expect("runs");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "{bin}: {stderr}");
+        let usage = stderr
+            .lines()
+            .find(|l| l.starts_with("Usage:"))
+            .unwrap_or_else(|| panic!("{bin}: no usage line: {stderr}"));
+        assert!(!usage.contains("--service-prefix"), "{usage}");
+    }
+    let output = Command::new(env!("CARGO_BIN_EXE_slope-replay"))
+        .arg("rec")
+        .env("SLOPE_SERVICE_PREFIX", "/robot9")
+        .output()
+        .expect("runs");
+    assert_eq!(
+        output.status.code(),
+        Some(2),
+        "a bad prefix is a usage error"
+    );
+}
+
+/// slope-echo and slope-record have no --config; their --service-prefix
+/// help does not send the user to one.
+#[test]
+fn the_clients_prefix_help_names_no_config_flag() {
+    for bin in [
+        env!("CARGO_BIN_EXE_slope-echo"),
+        env!("CARGO_BIN_EXE_slope-record"),
+    ] {
+        let (ok, stdout, _) = run(bin, &["--help"]);
+        assert!(ok);
+        assert!(!stdout.contains("--config"), "{bin}: {stdout}");
+        assert!(stdout.contains("/etc/slope/slope.toml"), "{bin}: {stdout}");
+    }
+}
