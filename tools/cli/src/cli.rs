@@ -121,18 +121,38 @@ impl CommonArgs {
     }
 }
 
-/// `Ok` when a program that takes its output as `-o` (or, as before,
-/// without the flag) was given one; else the usage error (status 2) that
-/// says what is missing and how to give it: `missing`, where clap's own
-/// message for a required group would name it `<--output <FILE>|OUTPUT>`.
-pub fn require_output<P: clap::CommandFactory>(
-    flag: Option<&Path>,
-    positional: Option<&Path>,
-    missing: &str,
-) -> Result<(), clap::Error> {
-    match flag.or(positional) {
-        Some(_) => Ok(()),
-        None => Err(P::command().error(clap::error::ErrorKind::MissingRequiredArgument, missing)),
+/// A program that takes its output as `-o PATH` (or, as before, without
+/// the flag): parsing fails with the usage error (status 2) that says what
+/// is missing and how to give it ([`Self::OUTPUT_MISSING`]), where clap's
+/// own message for a required group would name it `<--output <FILE>|OUTPUT>`.
+pub trait OutputArgs: clap::Parser {
+    /// What a command line without an output is told.
+    const OUTPUT_MISSING: &'static str;
+
+    /// The output given as `-o PATH`, and the one given without the flag.
+    fn outputs(&self) -> (Option<&Path>, Option<&Path>);
+
+    /// The command line, or the usage error that ends the program: clap's,
+    /// or [`Self::OUTPUT_MISSING`].
+    fn parse_checked() -> Self {
+        Self::try_parse_checked_from(std::env::args_os()).unwrap_or_else(|err| err.exit())
+    }
+
+    /// [`clap::Parser::try_parse_from`], and [`Self::OUTPUT_MISSING`] when
+    /// neither `-o PATH` nor PATH was given.
+    fn try_parse_checked_from<I, T>(args: I) -> Result<Self, clap::Error>
+    where
+        I: IntoIterator<Item = T>,
+        T: Into<std::ffi::OsString> + Clone,
+    {
+        let args = Self::try_parse_from(args)?;
+        match args.outputs() {
+            (None, None) => Err(Self::command().error(
+                clap::error::ErrorKind::MissingRequiredArgument,
+                Self::OUTPUT_MISSING,
+            )),
+            _ => Ok(args),
+        }
     }
 }
 

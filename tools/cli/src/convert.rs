@@ -18,7 +18,7 @@ use slope_sensor::recording::{ColorImage, DepthImage, FrameEntry, Recording};
 
 use slope_sensor::publish::StopFlag;
 
-use crate::cli::{max_frames_arg, require_output, Interruption, LogArgs};
+use crate::cli::{max_frames_arg, Interruption, LogArgs, OutputArgs};
 use crate::estimator::{load_config, method_arg};
 use crate::eval::open_recording;
 use crate::mcap_export::{McapExporter, McapFrame};
@@ -78,7 +78,7 @@ pub struct ConvertArgs {
     #[arg(long)]
     pub no_estimates: bool,
 
-    /// Largest frame (width x height of [depth]) to accept; a recording
+    /// Largest frame (the depth image's width x height) to accept; a recording
     /// with a larger one is refused before any cloud is allocated.
     #[arg(long, default_value_t = DEFAULT_MAX_CLOUD_POINTS)]
     pub max_points: usize,
@@ -90,29 +90,15 @@ pub struct ConvertArgs {
 /// What `slope-convert` without an output says (a usage error, status 2).
 pub const OUTPUT_MISSING: &str = "an output file is required: give it as -o FILE";
 
+impl OutputArgs for ConvertArgs {
+    const OUTPUT_MISSING: &'static str = OUTPUT_MISSING;
+
+    fn outputs(&self) -> (Option<&Path>, Option<&Path>) {
+        (self.output.as_deref(), self.output_positional.as_deref())
+    }
+}
+
 impl ConvertArgs {
-    /// The command line, or the usage error that ends the program: clap's,
-    /// or [`OUTPUT_MISSING`].
-    pub fn parse_checked() -> Self {
-        Self::try_parse_checked_from(std::env::args_os()).unwrap_or_else(|err| err.exit())
-    }
-
-    /// [`Parser::try_parse_from`], and [`OUTPUT_MISSING`] when neither
-    /// `-o FILE` nor FILE was given.
-    pub fn try_parse_checked_from<I, T>(args: I) -> Result<Self, clap::Error>
-    where
-        I: IntoIterator<Item = T>,
-        T: Into<std::ffi::OsString> + Clone,
-    {
-        let args = Self::try_parse_from(args)?;
-        require_output::<Self>(
-            args.output.as_deref(),
-            args.output_positional.as_deref(),
-            OUTPUT_MISSING,
-        )?;
-        Ok(args)
-    }
-
     /// `-o FILE` (or FILE without the flag).
     pub fn output(&self) -> &Path {
         match (&self.output, &self.output_positional) {

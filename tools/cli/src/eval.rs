@@ -165,7 +165,7 @@ pub struct EvalArgs {
     #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
 
-    /// Largest frame (width x height of [depth]) to accept; a recording
+    /// Largest frame (the depth image's width x height) to accept; a recording
     /// with a larger one is refused before any cloud is allocated.
     #[arg(long, default_value_t = DEFAULT_MAX_CLOUD_POINTS)]
     pub max_points: usize,

@@ -24,7 +24,7 @@ use slope_sensor::recording::{
 };
 use slope_sensor::source::{FrameSource, SourceFrame, SourceInfo};
 
-use crate::cli::{max_frames_arg, node_name, require_output, CommonArgs, CLIENT_PREFIX_HELP};
+use crate::cli::{max_frames_arg, node_name, CommonArgs, OutputArgs, CLIENT_PREFIX_HELP};
 use crate::mcap_export::{McapExporter, McapFrame};
 use crate::mount_args::MountArgs;
 use crate::replay::positive_f64;
@@ -169,29 +169,15 @@ pub const OUTPUT_MISSING: &str =
     "an output is required: give it as -o DIR (a recording directory), \
      or as -o FILE with --format mcap";
 
+impl OutputArgs for RecordArgs {
+    const OUTPUT_MISSING: &'static str = OUTPUT_MISSING;
+
+    fn outputs(&self) -> (Option<&Path>, Option<&Path>) {
+        (self.output.as_deref(), self.output_positional.as_deref())
+    }
+}
+
 impl RecordArgs {
-    /// The command line, or the usage error that ends the program: clap's,
-    /// or [`OUTPUT_MISSING`].
-    pub fn parse_checked() -> Self {
-        Self::try_parse_checked_from(std::env::args_os()).unwrap_or_else(|err| err.exit())
-    }
-
-    /// [`Parser::try_parse_from`], and [`OUTPUT_MISSING`] when neither
-    /// `-o PATH` nor PATH was given.
-    pub fn try_parse_checked_from<I, T>(args: I) -> Result<Self, clap::Error>
-    where
-        I: IntoIterator<Item = T>,
-        T: Into<std::ffi::OsString> + Clone,
-    {
-        let args = Self::try_parse_from(args)?;
-        require_output::<Self>(
-            args.output.as_deref(),
-            args.output_positional.as_deref(),
-            OUTPUT_MISSING,
-        )?;
-        Ok(args)
-    }
-
     /// `--format`, else mcap for an output named `*.mcap` (a directory
     /// named so would only be mistaken for an MCAP file), else a recording.
     pub fn format(&self) -> RecordFormat {

@@ -2,7 +2,7 @@
 
 use std::process::ExitCode;
 
-use slope_tools::cli::{exit_status, stop_on_signals};
+use slope_tools::cli::{exit_status, stop_on_signals, OutputArgs};
 use slope_tools::convert::{run, ConvertArgs};
 
 fn main() -> ExitCode {
