@@ -349,6 +349,29 @@ fn interrupted_counts(note: &str) -> Option<(usize, usize)> {
     Some((done.parse().ok()?, total.parse().ok()?))
 }
 
+/// What the output file holds before a conversion over it.
+const PREVIOUS: &[u8] = b"the previous conversion";
+
+/// slope-convert of `dir` into `ramp16.mcap` of a new directory that holds
+/// a previous output ([`PREVIOUS`]), once its first frame is converted.
+fn start_conversion(dir: &Path) -> (tempfile::TempDir, std::path::PathBuf, Proc) {
+    let out_dir = tempfile::tempdir().expect("temp dir");
+    let out = out_dir.path().join("ramp16.mcap");
+    std::fs::write(&out, PREVIOUS).expect("write the previous file");
+    let mut convert = Proc::spawn(
+        "slope-convert",
+        [
+            dir.to_str().expect("utf-8 path"),
+            "-o",
+            out.to_str().expect("utf-8 path"),
+            "-v",
+        ],
+    );
+    let line = convert.wait_stderr("frame converted", deadline(60.0));
+    assert!(line.is_some(), "{}", convert.diagnostics());
+    (out_dir, out, convert)
+}
+
 /// slope-convert stopped mid-run (after its first frame, logged at debug):
 /// status 0, and the output, which until then still held the previous
 /// file's bytes, is now a finished MCAP file with one depth image, cloud
@@ -358,23 +381,9 @@ fn interrupted_counts(note: &str) -> Option<(usize, usize)> {
 fn a_conversion_stops_cleanly_with_a_valid_mcap_file() {
     let dir = recording("ramp16");
     for signal in [Signal::SIGINT, Signal::SIGTERM] {
-        let out_dir = tempfile::tempdir().expect("temp dir");
-        let out = out_dir.path().join("ramp16.mcap");
-        let previous = b"the previous conversion";
-        std::fs::write(&out, previous).expect("write the previous file");
-        let mut convert = Proc::spawn(
-            "slope-convert",
-            [
-                dir.to_str().expect("utf-8 path"),
-                "-o",
-                out.to_str().expect("utf-8 path"),
-                "-v",
-            ],
-        );
-        let line = convert.wait_stderr("frame converted", deadline(60.0));
-        assert!(line.is_some(), "{}", convert.diagnostics());
+        let (out_dir, out, mut convert) = start_conversion(&dir);
         // Written elsewhere until finished: the old file is still there.
-        assert_eq!(std::fs::read(&out).expect("the output"), previous);
+        assert_eq!(std::fs::read(&out).expect("the output"), PREVIOUS);
         convert.signal(signal);
         convert.assert_exits_zero_within(Duration::from_secs(10));
         let stderr = convert.stderr_lines().join("\n");
@@ -424,21 +433,7 @@ fn names_in(dir: &Path) -> Vec<std::ffi::OsString> {
 fn a_second_signal_ends_a_conversion_without_leaving_its_temporary_file() {
     let dir = recording("ramp16");
     for _attempt in 0..5 {
-        let out_dir = tempfile::tempdir().expect("temp dir");
-        let out = out_dir.path().join("ramp16.mcap");
-        let previous = b"the previous conversion";
-        std::fs::write(&out, previous).expect("write the previous file");
-        let mut convert = Proc::spawn(
-            "slope-convert",
-            [
-                dir.to_str().expect("utf-8 path"),
-                "-o",
-                out.to_str().expect("utf-8 path"),
-                "-v",
-            ],
-        );
-        let line = convert.wait_stderr("frame converted", deadline(60.0));
-        assert!(line.is_some(), "{}", convert.diagnostics());
+        let (out_dir, out, mut convert) = start_conversion(&dir);
         // The temporary file is there, beside the previous output.
         assert_eq!(
             names_in(out_dir.path()).len(),
@@ -461,7 +456,7 @@ fn a_second_signal_ends_a_conversion_without_leaving_its_temporary_file() {
         let bytes = std::fs::read(&out).expect("the output");
         match status.code() {
             Some(130) => {
-                assert_eq!(bytes, previous, "{diagnostics}");
+                assert_eq!(bytes, PREVIOUS, "{diagnostics}");
                 return;
             }
             Some(0) => {

@@ -12,11 +12,7 @@ use slope_integration_tests::{deadline, read_notify_until, recording, unique_pre
 #[test]
 fn the_estimator_speaks_the_notify_protocol() {
     let dir = tempfile::tempdir().expect("temp dir");
-    let path = dir.path().join("notify.sock");
-    let socket = UnixDatagram::bind(&path).expect("bind the notify socket");
-    socket
-        .set_read_timeout(Some(Duration::from_millis(100)))
-        .expect("timeout");
+    let (socket, path) = notify_socket(dir.path());
     let prefix = unique_prefix("notify");
     let notify = path.to_str().expect("utf-8 path");
     let mut estimator = Proc::spawn_with_env(
@@ -88,11 +84,7 @@ fn the_estimator_speaks_the_notify_protocol() {
 #[test]
 fn a_config_error_says_failed_to_systemd() {
     let dir = tempfile::tempdir().expect("temp dir");
-    let path = dir.path().join("notify.sock");
-    let socket = UnixDatagram::bind(&path).expect("bind the notify socket");
-    socket
-        .set_read_timeout(Some(Duration::from_millis(100)))
-        .expect("timeout");
+    let (socket, path) = notify_socket(dir.path());
     let config = dir.path().join("slope.toml");
     std::fs::write(&config, "[estimator]\nmethd = \"tls\"\n").expect("write the config file");
     let prefix = unique_prefix("notify-config");
@@ -124,4 +116,15 @@ fn a_config_error_says_failed_to_systemd() {
         "{}",
         estimator.diagnostics()
     );
+}
+
+/// A datagram socket in `dir` for `NOTIFY_SOCKET`, read with a 100 ms
+/// timeout, and its path.
+fn notify_socket(dir: &std::path::Path) -> (UnixDatagram, std::path::PathBuf) {
+    let path = dir.join("notify.sock");
+    let socket = UnixDatagram::bind(&path).expect("bind the notify socket");
+    socket
+        .set_read_timeout(Some(Duration::from_millis(100)))
+        .expect("timeout");
+    (socket, path)
 }
