@@ -11,6 +11,7 @@ use crate::config_file::{
     config_path, is_config_error, SlopeFile, DEFAULT_CONFIG_PATH, EXIT_CONFIG,
 };
 use slope_sensor::publish::StopFlag;
+use slope_sensor::recording::Recording;
 use tracing_subscriber::EnvFilter;
 
 /// `-v`/`-q`: every program takes them, with the same meaning.
@@ -154,6 +155,21 @@ pub trait OutputArgs: clap::Parser {
             _ => Ok(args),
         }
     }
+}
+
+/// Opens the recording in `path` to read its frames (`slope-eval`,
+/// `slope-convert`, `slope-replay`): refuses a `[depth]` size of more than
+/// `max_points` points (`--max-points`) before any cloud is allocated, and
+/// a recording without frames.
+pub fn open_recording(path: &Path, max_points: usize) -> anyhow::Result<Recording> {
+    let recording = Recording::open(path)?;
+    recording
+        .check_points(max_points)
+        .map_err(|err| anyhow::anyhow!("{err} (--max-points)"))?;
+    if recording.frames().is_empty() {
+        anyhow::bail!("its frames.csv lists no frames");
+    }
+    Ok(recording)
 }
 
 /// What `--max-frames 0` (and `--count 0`) answers, in every program.

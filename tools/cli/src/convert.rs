@@ -18,9 +18,8 @@ use slope_sensor::recording::{ColorImage, DepthImage, FrameEntry, Recording};
 
 use slope_sensor::publish::StopFlag;
 
-use crate::cli::{max_frames_arg, Interruption, LogArgs, OutputArgs};
+use crate::cli::{max_frames_arg, open_recording, Interruption, LogArgs, OutputArgs};
 use crate::estimator::{load_config, method_arg};
-use crate::eval::open_recording;
 use crate::mcap_export::{McapExporter, McapFrame};
 
 #[derive(Debug, Parser)]

@@ -43,7 +43,7 @@ use slope_sensor::recording::{DepthImage, FrameEntry, Recording};
 
 use slope_sensor::publish::StopFlag;
 
-use crate::cli::{count_arg, max_frames_arg, Interruption, LogArgs};
+use crate::cli::{count_arg, max_frames_arg, open_recording, Interruption, LogArgs};
 use crate::demo::median;
 use crate::estimator::{load_config, method_arg};
 use crate::eval_artifacts::{Artifacts, Snapshot};
@@ -708,21 +708,6 @@ pub fn run(args: &EvalArgs, stop: &StopFlag) -> anyhow::Result<EvalOutcome> {
         outcome.interrupted = Some(interruption);
     }
     Ok(outcome)
-}
-
-/// Opens the recording in `path` to read its frames in this process
-/// (`slope-eval`, `slope-convert`): refuses a `[depth]` size of more than
-/// `max_points` points (`--max-points`) before any cloud is allocated, and
-/// a recording without frames (as `slope-replay` does).
-pub fn open_recording(path: &Path, max_points: usize) -> anyhow::Result<Recording> {
-    let recording = Recording::open(path)?;
-    recording
-        .check_points(max_points)
-        .map_err(|err| anyhow::anyhow!("{err} (--max-points)"))?;
-    if recording.frames().is_empty() {
-        bail!("its frames.csv lists no frames");
-    }
-    Ok(recording)
 }
 
 /// Writes one line to stdout without disturbing the progress bar. `false`

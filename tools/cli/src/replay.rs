@@ -9,10 +9,9 @@ use clap::Parser;
 use slope_ipc_types::{ServiceNames, DEFAULT_MAX_CLOUD_POINTS};
 use slope_sensor::ipc::{create_node, CloudPublisher};
 use slope_sensor::publish::{publish_stream, Pacing, PublishOptions, PublishStats, StopFlag};
-use slope_sensor::recording::Recording;
 use slope_sensor::source::{FrameSource, RecordingSource};
 
-use crate::cli::{max_frames_arg, node_name, CommonArgs};
+use crate::cli::{max_frames_arg, node_name, open_recording, CommonArgs};
 use crate::config_file::{config_path, SlopeFile, DEFAULT_CONFIG_PATH};
 
 #[derive(Debug, Parser)]
@@ -111,15 +110,9 @@ pub fn positive_f64(text: &str) -> Result<f64, String> {
 }
 
 pub fn run(args: &ReplayArgs, stop: &StopFlag) -> anyhow::Result<PublishStats> {
-    let recording = Recording::open(&args.recording)
+    let recording = open_recording(&args.recording, args.max_points)
         .with_context(|| format!("cannot replay {}", args.recording.display()))?;
     let frames = recording.frames().len();
-    if frames == 0 {
-        anyhow::bail!(
-            "cannot replay {}: its frames.csv lists no frames",
-            args.recording.display()
-        );
-    }
     let mut source = RecordingSource::new(recording, args.looping);
     let names = service_names(args)?;
     let node = create_node(&node_name("slope-replay"))?;
