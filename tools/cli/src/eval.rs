@@ -563,11 +563,6 @@ pub fn run(args: &EvalArgs, stop: &StopFlag) -> anyhow::Result<EvalOutcome> {
         frame: args.render_frame,
         every: args.render_every,
     };
-    artifacts.prepare()?;
-    if let Some(dir) = &args.plot {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("cannot create the plot directory {}", dir.display()))?;
-    }
     let mut outcome = EvalOutcome::default();
     let mut opened = Vec::new();
     let mut files = Vec::new();
@@ -594,6 +589,14 @@ pub fn run(args: &EvalArgs, stop: &StopFlag) -> anyhow::Result<EvalOutcome> {
              with recording.toml, frames.csv and depth/",
             files.join(", ")
         );
+    }
+    // Output directories only once something will be written into them.
+    if !opened.is_empty() {
+        artifacts.prepare()?;
+        if let Some(dir) = &args.plot {
+            std::fs::create_dir_all(dir)
+                .with_context(|| format!("cannot create the plot directory {}", dir.display()))?;
+        }
     }
     let frame_limit = |recording: &Recording| {
         let max = args

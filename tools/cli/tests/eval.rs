@@ -542,8 +542,18 @@ fn files_in_a_glob_are_skipped_and_other_directories_explained() {
     // Only files, no directory: nothing was evaluated, and that is an
     // error (it was a warning and status 0).
     let frames_csv = good.join("frames.csv");
-    let out = eval(&[path_str(&frames_csv), path_str(&readme)]);
+    let (render, plot) = (dir.path().join("render"), dir.path().join("plot"));
+    let out = eval(&[
+        path_str(&frames_csv),
+        path_str(&readme),
+        "--render",
+        path_str(&render),
+        "--plot",
+        path_str(&plot),
+    ]);
     assert_eq!(out.code, Some(1), "{}", out.stderr);
+    // Nothing to write: no output directory left behind.
+    assert!(!render.exists() && !plot.exists());
     assert!(out.stdout.is_empty(), "{}", out.stdout);
     assert!(
         out.stderr.contains("no recording directory was given")
