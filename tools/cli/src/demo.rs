@@ -19,7 +19,7 @@ use slope_sensor::ipc::{create_node, EstimateSubscriber};
 use slope_sensor::publish::StopFlag;
 use slope_sensor::recording::Recording;
 
-use crate::cli::{node_name, CommonArgs};
+use crate::cli::{node_name, prefix_arg, CommonArgs};
 use crate::estimator::method_arg;
 use crate::replay::positive_f64;
 
@@ -223,6 +223,16 @@ fn line_for(estimate: &SlopeEstimate, truth: Option<f64>) -> String {
 }
 
 pub fn run(args: &DemoArgs, stop: &StopFlag) -> anyhow::Result<DemoSummary> {
+    let prefix = format!(
+        "{}-demo-{}",
+        args.common.prefix_or(DEFAULT_SERVICE_PREFIX),
+        std::process::id()
+    );
+    // The given prefix was checked alone; with -demo-<pid> it may no
+    // longer fit.
+    if let Err(reason) = prefix_arg(&prefix) {
+        bail!("--service-prefix with the demo's -demo-<pid> added: {reason}");
+    }
     let recording_dir = args.recording_dir();
     let recording = Recording::open(&recording_dir)
         .with_context(|| format!("cannot open the demo recording {}", recording_dir.display()))?;
@@ -236,11 +246,6 @@ pub fn run(args: &DemoArgs, stop: &StopFlag) -> anyhow::Result<DemoSummary> {
     let estimator_bin = binary_path("slope-estimator")?;
     let replay_bin = binary_path("slope-replay")?;
 
-    let prefix = format!(
-        "{}-demo-{}",
-        args.common.prefix_or(DEFAULT_SERVICE_PREFIX),
-        std::process::id()
-    );
     let names = ServiceNames::new(prefix.clone());
     let node = create_node(&node_name("slope-demo"))?;
     let subscriber = EstimateSubscriber::create(&node, &names)?;

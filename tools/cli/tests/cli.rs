@@ -155,6 +155,16 @@ fn bad_values_are_refused() {
     let (ok, _, stderr) = run(echo, &["--service-prefix", ""]);
     assert!(!ok);
     assert!(stderr.contains("service prefix is empty"), "{stderr}");
+    // The longest prefix allowed alone: the demo's -demo-<pid> does not
+    // fit after it, said before anything starts.
+    let longest = "p".repeat(slope_tools::cli::max_prefix_len());
+    let demo = env!("CARGO_BIN_EXE_slope-demo");
+    let (ok, _, stderr) = run(demo, &["--service-prefix", &longest]);
+    assert!(!ok);
+    assert!(
+        stderr.contains("with the demo's -demo-<pid> added: the service prefix is"),
+        "{stderr}"
+    );
     let eval = env!("CARGO_BIN_EXE_slope-eval");
     let (ok, _, stderr) = run(eval, &["REC", "--render", "out", "--render-every", "0"]);
     assert!(!ok);
