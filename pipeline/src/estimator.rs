@@ -37,7 +37,7 @@ use crate::selection::{
     chosen_segments, select_ground, select_inclined, Ground, PlaneSegment, PlaneSummary, Selection,
 };
 use crate::statistical_outlier::StatisticalOutlierFilter;
-use crate::tracking::{FrameSlope, SlopeTracker};
+use crate::tracking::{FrameSlope, SlopeTracker, StreamPosition};
 
 pub use crate::estimate::{Estimate, PlaneEstimate, StageTimings};
 pub use crate::inspection::{InspectedNormal, Inspection};
@@ -47,8 +47,8 @@ pub use crate::inspection::{InspectedNormal, Inspection};
 pub struct FrameInfo {
     /// Frame index (the cloud header's `frame_index`).
     pub index: u64,
-    /// Capture time, nanoseconds (any epoch). Carried with the frame; the
-    /// tracker counts frames, not time.
+    /// Capture time, nanoseconds (any epoch, one clock per stream): a pause
+    /// longer than `tracking.max_gap_s` restarts the tracked slope.
     pub stamp_ns: u64,
 }
 
@@ -168,7 +168,9 @@ impl Estimator {
     /// does not repeat on every frame; the same seed and frame give the same
     /// answer).
     /// The estimate carries the tracked slope after this frame
-    /// (`tracking.rs`).
+    /// (`tracking.rs`); a frame that does not continue the last one's
+    /// stream (its index not larger, a pause over `tracking.max_gap_s`,
+    /// another image size or intrinsics) starts a new track.
     pub fn estimate_frame(&mut self, cloud: &CloudView<'_>, frame: FrameInfo) -> Estimate {
         let mut clock = Stopwatch::new();
         let mut estimate = self.run(cloud, frame.index, &mut clock);
@@ -179,7 +181,17 @@ impl Estimator {
             error_deg: estimate.slope_std_deg / samples.sqrt(),
             confidence: estimate.confidence,
         };
-        estimate.tracked = Some(self.tracker.update(&slope, &self.config.tracking));
+        let position = StreamPosition {
+            index: frame.index,
+            stamp_ns: frame.stamp_ns,
+            width: cloud.width,
+            height: cloud.height,
+            intrinsics: cloud.intrinsics,
+        };
+        let tracked = self
+            .tracker
+            .update_at(position, &slope, &self.config.tracking);
+        estimate.tracked = Some(tracked);
         clock.lap("tracking");
         estimate.timings = clock.finish();
         estimate

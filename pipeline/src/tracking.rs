@@ -21,6 +21,13 @@
 //!   frames in a row agree with each other (all within the gate of their own
 //!   median), the track restarts from them: a new ramp, a wall after a
 //!   ramp.
+//! - **One stream, one track.** The track restarts when the frames stop
+//!   continuing one stream ([`StreamPosition::continues`]): the frame index
+//!   does not grow (a new stream, a replay started again or looped), the
+//!   capture time goes back or jumps by more than `max_gap_s` (the camera
+//!   paused or was restarted), or the image size or intrinsics change
+//!   (another camera). A slope tracked before a pause is not the slope of
+//!   what is ahead after it.
 //! - **Its own standard deviation.** `1.2533 sigma / sqrt(n)` (the standard
 //!   error of a median of n), sigma the larger of the window's robust spread
 //!   and the median of the frames' own errors (`slope_std_deg / sqrt(samples)`),
@@ -31,7 +38,9 @@ use std::collections::VecDeque;
 use serde::{Deserialize, Serialize};
 use slope_ipc_types::EstimateStatus;
 
-use crate::validate::{at_least, fraction, non_negative, InvalidValue};
+use slope_ipc_types::Intrinsics;
+
+use crate::validate::{at_least, fraction, non_negative, positive, InvalidValue};
 
 /// The tracked slope after a frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -65,6 +74,9 @@ pub struct TrackingConfig {
     pub reset_after: usize,
     /// Frames in a row without a usable estimate end the track.
     pub max_missed: usize,
+    /// A longer pause between two frames' capture times, seconds, ends the
+    /// track (the same second as `max_missed` at 30 Hz).
+    pub max_gap_s: f64,
 }
 
 impl Default for TrackingConfig {
@@ -76,6 +88,7 @@ impl Default for TrackingConfig {
             gate_sigmas: 4.0,
             reset_after: 5,
             max_missed: 30,
+            max_gap_s: 1.0,
         }
     }
 }
@@ -88,7 +101,43 @@ impl TrackingConfig {
         at_least("max_missed", self.max_missed, 1)?;
         fraction("min_confidence", self.min_confidence)?;
         non_negative("gate_deg", self.gate_deg)?;
-        non_negative("gate_sigmas", self.gate_sigmas)
+        non_negative("gate_sigmas", self.gate_sigmas)?;
+        positive("max_gap_s", self.max_gap_s)
+    }
+}
+
+/// Where a frame sits in its stream, as far as the track goes: its index,
+/// capture time and camera.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StreamPosition {
+    pub index: u64,
+    /// Capture time, nanoseconds (any epoch, one clock per stream).
+    pub stamp_ns: u64,
+    pub width: usize,
+    pub height: usize,
+    pub intrinsics: Intrinsics,
+}
+
+impl StreamPosition {
+    /// True when `next` is a later frame of the same stream: a larger
+    /// index, a capture time neither earlier nor more than `max_gap_s`
+    /// later, and the same image size and intrinsics (bit for bit).
+    pub fn continues(&self, next: &StreamPosition, max_gap_s: f64) -> bool {
+        let gap_s = next
+            .stamp_ns
+            .checked_sub(self.stamp_ns)
+            .map(|ns| ns as f64 * 1e-9);
+        let camera = |p: &StreamPosition| {
+            let k = p.intrinsics;
+            (
+                p.width,
+                p.height,
+                [k.fx, k.fy, k.cx, k.cy].map(f64::to_bits),
+            )
+        };
+        next.index > self.index
+            && gap_s.is_some_and(|gap| gap <= max_gap_s)
+            && camera(self) == camera(next)
     }
 }
 
@@ -116,6 +165,8 @@ pub struct SlopeTracker {
     frames: u32,
     missed: usize,
     scratch: Vec<f64>,
+    /// The last frame seen.
+    last: Option<StreamPosition>,
 }
 
 impl SlopeTracker {
@@ -123,7 +174,27 @@ impl SlopeTracker {
         Self::default()
     }
 
-    /// Feeds one frame; returns the track after it.
+    /// Feeds one frame at `position` of its stream; returns the track after
+    /// it. A frame that does not continue the last one's stream starts a
+    /// new track.
+    pub fn update_at(
+        &mut self,
+        position: StreamPosition,
+        frame: &FrameSlope,
+        config: &TrackingConfig,
+    ) -> TrackedSlope {
+        let continues = self
+            .last
+            .is_some_and(|last| last.continues(&position, config.max_gap_s));
+        if !continues {
+            self.clear();
+            self.missed = 0;
+        }
+        self.last = Some(position);
+        self.update(frame, config)
+    }
+
+    /// Feeds the next frame of the stream; returns the track after it.
     pub fn update(&mut self, frame: &FrameSlope, config: &TrackingConfig) -> TrackedSlope {
         let usable = frame.status == EstimateStatus::Ok
             && frame.slope_deg.is_finite()
@@ -310,6 +381,76 @@ mod tests {
         }
         let tr = t.update(&none, &config);
         assert!(tr.slope_deg.is_nan() && tr.frames == 0, "{tr:?}");
+    }
+
+    fn at(index: u64, stamp_s: f64) -> StreamPosition {
+        StreamPosition {
+            index,
+            stamp_ns: (stamp_s * 1e9) as u64,
+            width: 512,
+            height: 424,
+            intrinsics: Intrinsics {
+                fx: 365.0,
+                fy: 365.0,
+                cx: 256.3,
+                cy: 207.0,
+            },
+        }
+    }
+
+    /// A 16 degree track, then a wall: as the next frame of the stream the
+    /// wall is rejected (it takes `reset_after` frames to restart); as the
+    /// first frame after a break of the stream it starts a new track.
+    #[test]
+    fn a_break_in_the_stream_restarts_the_track() {
+        let config = TrackingConfig::default();
+        let track_16 = || {
+            let mut t = SlopeTracker::new();
+            for k in 0..10 {
+                let tr = t.update_at(at(100 + k, 10.0 + k as f64 / 30.0), &ok(16.0), &config);
+                assert_eq!((tr.frames, tr.slope_deg), (k as u32 + 1, 16.0));
+            }
+            t
+        };
+        let last = at(109, 10.3);
+        let mut next = at(110, 10.3 + 1.0 / 30.0);
+        let tr = track_16().update_at(next, &ok(90.0), &config);
+        assert!(!tr.accepted && tr.slope_deg == 16.0, "{tr:?}");
+        // Dropped frames within the gap still continue the stream.
+        next.index = 140;
+        next.stamp_ns = last.stamp_ns + 999_000_000;
+        assert!(last.continues(&next, config.max_gap_s));
+        let mut other_intrinsics = next;
+        other_intrinsics.intrinsics.cx = 254.69;
+        let breaks = [
+            // The index starts again (a replay looped or restarted) ...
+            StreamPosition { index: 0, ..next },
+            StreamPosition { index: 109, ..next },
+            // ... the camera paused, or its clock went back ...
+            StreamPosition {
+                stamp_ns: last.stamp_ns + 1_001_000_000,
+                ..next
+            },
+            StreamPosition {
+                stamp_ns: last.stamp_ns - 1,
+                ..next
+            },
+            // ... or another camera (size, intrinsics).
+            StreamPosition {
+                width: 640,
+                height: 480,
+                ..next
+            },
+            other_intrinsics,
+        ];
+        for position in breaks {
+            assert!(!last.continues(&position, config.max_gap_s), "{position:?}");
+            let tr = track_16().update_at(position, &ok(90.0), &config);
+            assert!(
+                tr.accepted && tr.slope_deg == 90.0 && tr.frames == 1,
+                "{position:?}: {tr:?}"
+            );
+        }
     }
 
     #[test]

@@ -80,6 +80,47 @@ fn the_tracked_slope_ignores_corrupted_frames_on_an_approach() {
     assert!(worst_raw > 10.0, "the corrupted frames did not corrupt");
 }
 
+/// A robot tracks a 16 degree ramp, then its stream breaks (a replay
+/// starts again at frame 0, or the camera pauses for 2 s) and a 35 degree
+/// ramp is ahead: the tracked slope is the new ramp's at once. Had the
+/// stream continued, that frame would have been rejected as an outlier of
+/// the old track.
+#[test]
+fn a_new_stream_does_not_inherit_the_tracked_slope() {
+    let ramp =
+        |truth: f64, k: u64| SceneCloud::kinect2(&Scene::ramp_at(truth, 2.0, 0.5, -20.0, 0.0), k);
+    let tracking_16 = || {
+        let mut est = Estimator::new(EstimatorConfig::default());
+        for k in 10..13 {
+            let e = est.estimate_frame(&ramp(16.0, k).view(), frame(k));
+            let tracked = e.tracked.expect("estimate_frame tracks");
+            assert!((tracked.slope_deg - 16.0).abs() < 0.3, "{tracked:?}");
+        }
+        est
+    };
+    let steeper = ramp(35.0, 13);
+    let continued = tracking_16().estimate_frame(&steeper.view(), frame(13));
+    let tracked = continued.tracked.expect("tracks");
+    assert!(
+        !tracked.accepted && (tracked.slope_deg - 16.0).abs() < 0.3,
+        "{tracked:?}"
+    );
+    let paused = FrameInfo {
+        stamp_ns: frame(13).stamp_ns + 2_000_000_000,
+        ..frame(13)
+    };
+    for info in [frame(0), paused] {
+        let e = tracking_16().estimate_frame(&steeper.view(), info);
+        let tracked = e.tracked.expect("tracks");
+        assert!((e.slope_deg - 35.0).abs() < 0.5, "{e:?}");
+        assert!(
+            tracked.accepted && tracked.frames == 1,
+            "{info:?}: {tracked:?}"
+        );
+        assert_eq!(tracked.slope_deg, e.slope_deg);
+    }
+}
+
 /// Noisier frames than a Kinect v2 (depth noise 6 mm at 1 m, growing with
 /// z^2) of shallow ramps: the median over frames stays within 0.2 degrees of
 /// the truth. (The upward bias of unsigned pair angles, which the angles
