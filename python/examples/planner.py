@@ -1,15 +1,19 @@
 #!/usr/bin/env python3
 """A planner's view of slope: reads estimates and decides a speed.
 
-    python3 python/examples/planner.py --prefix slope
+    python3 python/examples/planner.py --service-prefix slope
     python3 python/examples/planner.py --json --count 10   # one JSON object per estimate
 
 The speed rule is an example, not advice: full speed on flat ground, slower
 on steeper ramps, stop above --max-slope or when the estimate is not trusted.
+The slope is the tracked one while this frame agrees with the track; when it
+does not (the track is about to follow a new surface, or this frame is an
+outlier), the steeper of the two.
 """
 
 import argparse
 import json
+import os
 import sys
 
 import slope_client
@@ -21,9 +25,13 @@ def speed_for(estimate, max_slope_deg: float, min_confidence: float) -> float:
         return 1.0  # flat floor ahead
     if not estimate.ok or estimate.confidence < min_confidence:
         return 0.0  # not sure: stop
-    slope = estimate.tracked_slope_deg
-    if slope != slope:  # NaN: no track yet, use this frame's value
-        slope = estimate.slope_deg
+    slope = estimate.slope_deg
+    tracked = estimate.tracked_slope_deg
+    if tracked == tracked:  # not NaN: there is a track
+        if estimate.tracked_accepted:
+            slope = tracked  # this frame agrees with the track: its steadier value
+        else:
+            slope = max(slope, tracked, key=abs)  # they disagree: the steeper one
     if abs(slope) >= max_slope_deg:
         return 0.0
     return 1.0 - abs(slope) / max_slope_deg
@@ -31,7 +39,14 @@ def speed_for(estimate, max_slope_deg: float, min_confidence: float) -> float:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--prefix", default="slope", help="service prefix (default: slope)")
+    default_prefix = os.environ.get("SLOPE_SERVICE_PREFIX") or slope_client.DEFAULT_PREFIX
+    parser.add_argument(
+        "--service-prefix",
+        "--prefix",
+        dest="prefix",
+        default=default_prefix,
+        help="service prefix of the slope processes (default: $SLOPE_SERVICE_PREFIX, else slope)",
+    )
     parser.add_argument("--count", type=int, help="stop after this many estimates")
     parser.add_argument("--timeout-s", type=float, help="stop after this many seconds without one")
     parser.add_argument("--json", action="store_true", help="one JSON object per estimate")

@@ -187,7 +187,7 @@ fn a_python_planner_receives_real_estimates() {
         &bin,
         [
             planner_script.to_str().expect("utf-8 path"),
-            "--prefix",
+            "--service-prefix",
             &prefix,
             "--json",
             "--count",
