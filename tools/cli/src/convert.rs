@@ -10,7 +10,7 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::Context;
+use anyhow::{bail, Context};
 use clap::Parser;
 use slope_ipc_types::{CloudPoint, SlopeEstimate, DEFAULT_MAX_CLOUD_POINTS};
 use slope_pipeline::{CloudView, Estimator, FrameInfo};
@@ -35,8 +35,9 @@ use crate::mcap_export::{McapExporter, McapFrame};
 z float32 and rgb: the recording's colour image, 0 for a frame without one) and the slope estimate (/slope/estimate, JSON with schema \
 slope.estimate.json/1: the keys of slope-echo --json), every channel JSON with a JSON Schema. \
 The estimates come from the estimator run here on each frame (--no-estimates leaves them out). A colour \
-image that cannot be read is a warning: that frame's points get rgb 0. A recording \
-whose frames.csv lists no frames is refused (no file is written).
+image that cannot be read is a warning: that frame's points get rgb 0. A depth image \
+that cannot be read skips its frame (a warning); a recording whose frames.csv lists no frames, or \
+none of whose frames can be read, is refused (no file is written).
 
 OUT.mcap is written under a temporary name in its directory and renamed into place when finished: \
 a run that fails leaves an existing OUT.mcap as it was. SIGINT or SIGTERM (Ctrl-C) stops the \
@@ -196,6 +197,21 @@ pub fn run(args: &ConvertArgs, stop: &StopFlag) -> anyhow::Result<ConvertStats> 
         stats.frames += 1;
         stats.estimates += u64::from(message.is_some());
         tracing::debug!(frame = frame.index, "frame converted");
+    }
+    if stats.frames == 0 {
+        // Dropped unfinished, the exporter removes its temporary file: an
+        // earlier output stays as it was.
+        let output = args.output().display();
+        if stats.interrupted.is_some() {
+            tracing::warn!("stopped before the first frame; {output} left as it was");
+            return Ok(stats);
+        }
+        bail!(
+            "no frame of {} could be read ({} bad frame(s), see the warnings above); {output} \
+             was not written",
+            args.recording.display(),
+            stats.bad_frames
+        );
     }
     exporter.finish()?;
     if stats.bad_colors > 0 {

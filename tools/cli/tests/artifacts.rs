@@ -62,6 +62,30 @@ fn a_failed_conversion_keeps_the_previous_output() {
     );
     let entries = std::fs::read_dir(dir.path()).expect("dir").count();
     assert_eq!(entries, 1, "only the previous file");
+    // A recording none of whose frames can be read (its depth images are
+    // missing) is a failure too: the previous output is not replaced by an
+    // empty one (it was, with status 0).
+    let unreadable = dir.path().join("unreadable");
+    std::fs::create_dir(&unreadable).expect("mkdir");
+    for file in ["recording.toml", "frames.csv"] {
+        std::fs::copy(ramp16().join(file), unreadable.join(file)).expect("copy");
+    }
+    let (code, stderr) = convert(&[
+        unreadable.to_str().expect("utf-8"),
+        "-o",
+        out.to_str().expect("utf-8"),
+    ]);
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(
+        stderr.contains("no frame of") && stderr.contains("30 bad frame(s)"),
+        "{stderr}"
+    );
+    assert_eq!(
+        std::fs::read(&out).expect("the previous file"),
+        b"the previous conversion"
+    );
+    let entries = std::fs::read_dir(dir.path()).expect("dir").count();
+    assert_eq!(entries, 2, "the previous file and the recording");
 }
 
 fn png_size(path: &Path) -> (u32, u32, Vec<u8>) {
