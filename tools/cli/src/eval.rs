@@ -75,8 +75,8 @@ the recording. Per frame the JSON also gives both planes ([a, b, c, d], camera f
 inliers, RMS and area, the confidence and its reasons, ground_from_mount and the tracked slope; \
 the summary counts the ok frames whose confidence is below 0.5 (low_confidence_frames).\n\n\
 A frame whose depth image cannot be read is reported with status bad_frame and its error; the \
-evaluation goes on. A recording that cannot be opened, or whose frames.csv lists no frames, is \
-reported by name, the others are still evaluated, and the exit status is non-zero.\n\n\
+evaluation goes on. A recording that cannot be opened, whose frames.csv lists no frames or none \
+of whose frames can be read is reported by name, the others are still evaluated, and the exit status is non-zero.\n\n\
 SIGINT or SIGTERM (Ctrl-C) stops the run after the frame being evaluated: the recording under way \
 is reported with the frames evaluated so far (its summary covers those frames only), recordings \
 not reached are not reported, and the run says \"interrupted after N of M frames\" (below the \
@@ -748,6 +748,8 @@ fn evaluate_recording(
     let meta = recording.meta();
     let (width, height) = (meta.depth.width as usize, meta.depth.height as usize);
     let mut evaluated = 0;
+    let mut first_bad: Option<String> = None;
+    let mut bad = 0;
     for (position, frame) in frames.iter().enumerate() {
         if stop.is_stopped() {
             break;
@@ -789,6 +791,8 @@ fn evaluate_recording(
                     });
                 }
                 bar.inc(estimators.len() as u64);
+                bad += 1;
+                first_bad.get_or_insert(error);
             }
             Ok(()) => {
                 projector.project_into(&depth.data, None, &mut points);
@@ -842,6 +846,14 @@ fn evaluate_recording(
                 }
             }
         }
+    }
+    if evaluated > 0 && bad == evaluated {
+        // Some bad frames are counted in the report; none readable at all
+        // is a broken recording.
+        failures.push(format!(
+            "cannot evaluate {label}: none of its {bad} frame(s) could be read (the first: {})",
+            first_bad.unwrap_or_default()
+        ));
     }
     let reports = estimators
         .iter()

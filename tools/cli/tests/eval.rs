@@ -663,6 +663,21 @@ fn a_bad_frame_is_reported_and_the_others_evaluated() {
     let error = bad["error"].as_str().unwrap();
     assert!(error.contains("000001.png"), "{error}");
     assert!(out.stderr.contains("000001.png"), "{}", out.stderr);
+    // No frame readable: still reported, and a failure (it was status 0).
+    for k in [0, 2] {
+        std::fs::write(rec.join(format!("depth/00000{k}.png")), b"not a png").unwrap();
+    }
+    let out = eval(&[path_str(&rec), "--json", "--method", "tls"]);
+    assert_eq!(out.code, Some(1), "{}", out.stderr);
+    let reports = json_lines(&out.stdout);
+    assert_eq!(reports[0]["summary"]["not_ok"]["bad_frame"], 3);
+    assert!(
+        out.stderr
+            .contains("none of its 3 frame(s) could be read (the first: ")
+            && out.stderr.contains("000000.png"),
+        "{}",
+        out.stderr
+    );
 }
 
 #[test]
