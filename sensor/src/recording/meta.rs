@@ -62,7 +62,81 @@ pub struct MountInfo {
     pub roll_deg: Option<f64>,
 }
 
+/// The plausible range of a mount value (a recording's `[mount]`, the
+/// daemons' `[mount]`, the `--mount-*` flags).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MountRange {
+    /// What the value is, for messages: "the mount pitch (degrees)".
+    pub what: &'static str,
+    pub low: f64,
+    pub high: f64,
+    /// True when `low` itself is out of range.
+    pub low_excluded: bool,
+}
+
+impl MountRange {
+    /// The optical centre's height above the ground, metres: (0, 10].
+    pub const HEIGHT_M: Self = Self {
+        what: "the mount height (m)",
+        low: 0.0,
+        high: 10.0,
+        low_excluded: true,
+    };
+    /// Pitch, degrees: [-90, 90] (a camera turned further is rolled by 180).
+    pub const PITCH_DEG: Self = Self {
+        what: "the mount pitch (degrees)",
+        low: -90.0,
+        high: 90.0,
+        low_excluded: false,
+    };
+    /// Roll, degrees: [-180, 180].
+    pub const ROLL_DEG: Self = Self {
+        what: "the mount roll (degrees)",
+        low: -180.0,
+        high: 180.0,
+        low_excluded: false,
+    };
+
+    /// `value` when finite and in range, else why not.
+    pub fn check(&self, value: f64) -> Result<f64, String> {
+        let above = if self.low_excluded {
+            value > self.low
+        } else {
+            value >= self.low
+        };
+        if value.is_finite() && above && value <= self.high {
+            Ok(value)
+        } else {
+            let lower = if self.low_excluded {
+                "above"
+            } else {
+                "at least"
+            };
+            Err(format!(
+                "{} must be {lower} {} and at most {}, not {value}",
+                self.what, self.low, self.high
+            ))
+        }
+    }
+}
+
 impl MountInfo {
+    /// Checks every key given against its [`MountRange`] (a key left out
+    /// is unknown; `nan` is not a way to say so). The error is the first bad
+    /// key (`height_m`, `pitch_deg` or `roll_deg`), its value and the reason.
+    pub fn check(&self) -> Result<(), (&'static str, f64, String)> {
+        for (key, value, range) in [
+            ("height_m", self.height_m, MountRange::HEIGHT_M),
+            ("pitch_deg", self.pitch_deg, MountRange::PITCH_DEG),
+            ("roll_deg", self.roll_deg, MountRange::ROLL_DEG),
+        ] {
+            if let Some(value) = value {
+                range.check(value).map_err(|reason| (key, value, reason))?;
+            }
+        }
+        Ok(())
+    }
+
     /// The IPC form: NaN for every unknown key.
     pub fn to_mount(&self) -> Mount {
         Mount {
@@ -184,18 +258,13 @@ pub(crate) fn validate_meta(meta: &RecordingMeta, path: &Path) -> Result<(), Rec
             return Err(keys.invalid(key, format!("must be a positive number, found {value}")));
         }
     }
-    let optional = [
-        ("mount.height_m", meta.mount.height_m),
-        ("mount.pitch_deg", meta.mount.pitch_deg),
-        ("mount.roll_deg", meta.mount.roll_deg),
-    ];
-    for (key, value) in [("depth.cx", Some(d.cx)), ("depth.cy", Some(d.cy))]
-        .into_iter()
-        .chain(optional)
-    {
-        if let Some(value) = value.filter(|v| !v.is_finite()) {
+    for (key, value) in [("depth.cx", d.cx), ("depth.cy", d.cy)] {
+        if !value.is_finite() {
             return Err(keys.invalid(key, format!("must be a finite number, found {value}")));
         }
+    }
+    if let Err((key, _, reason)) = meta.mount.check() {
+        return Err(keys.invalid(&format!("mount.{key}"), reason));
     }
     if let Some(slope) = meta.truth.slope_deg {
         check_truth_deg(slope).map_err(|reason| keys.invalid("truth.slope_deg", reason))?;
@@ -440,6 +509,67 @@ mod tests {
             let mut meta = sample();
             meta.truth.slope_deg = Some(good);
             validate_meta(&meta, Path::new("r.toml")).unwrap();
+        }
+    }
+
+    /// A recording's `[mount]` out of range (a typing error) is refused by
+    /// key, as the daemons' `[mount]` and the flags are (it was read and
+    /// spoiled every estimate).
+    #[test]
+    fn a_recording_mount_out_of_range_is_refused_by_key() {
+        let text = "format = \"slope-recording\"\nversion = 1\n[depth]\nwidth = 4\nheight = 3\n\
+                    unit_m = 1\nfx = 365\nfy = 366\ncx = 2\ncy = 1\n[mount]\npitch_deg = 500\n";
+        let err = parse_meta(text, Path::new("r.toml")).unwrap_err();
+        assert!(
+            matches!(&err, RecordingError::InvalidKey { key, reason, .. }
+                if key == "mount.pitch_deg" && reason.contains("at most 90, not 500")),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn a_mount_out_of_range_or_nan_is_refused() {
+        assert_eq!(MountInfo::default().check(), Ok(()));
+        let good = MountInfo {
+            height_m: Some(0.4),
+            pitch_deg: Some(-90.0),
+            roll_deg: Some(180.0),
+        };
+        assert_eq!(good.check(), Ok(()));
+        for (mount, key) in [
+            (
+                MountInfo {
+                    height_m: Some(-1.0),
+                    ..MountInfo::default()
+                },
+                "height_m",
+            ),
+            (
+                MountInfo {
+                    height_m: Some(f64::NAN),
+                    ..MountInfo::default()
+                },
+                "height_m",
+            ),
+            (
+                MountInfo {
+                    height_m: Some(0.4),
+                    pitch_deg: Some(f64::NAN),
+                    ..MountInfo::default()
+                },
+                "pitch_deg",
+            ),
+            (
+                MountInfo {
+                    roll_deg: Some(f64::INFINITY),
+                    ..MountInfo::default()
+                },
+                "roll_deg",
+            ),
+        ] {
+            let (bad, _, reason) = mount.check().expect_err("refused");
+            assert_eq!(bad, key, "{mount:?}");
+            assert!(reason.contains("must be"), "{reason}");
         }
     }
 }

@@ -26,7 +26,9 @@ mod reader;
 mod writer;
 
 pub use error::RecordingError;
-pub use meta::{DepthInfo, MountInfo, RecordingMeta, TruthInfo, FORMAT_NAME, FORMAT_VERSION};
+pub use meta::{
+    DepthInfo, MountInfo, MountRange, RecordingMeta, TruthInfo, FORMAT_NAME, FORMAT_VERSION,
+};
 pub use reader::{FrameEntry, Recording};
 pub use writer::{PngCompression, RecordingWriter};
 

@@ -36,7 +36,6 @@ use slope_sensor::recording::MountInfo;
 
 use crate::cli::prefix_arg;
 use crate::health::DEFAULT_HEALTH_INTERVAL_S;
-use crate::mount_args::check_mount_info;
 use crate::replay::POSITIVE_RANGE;
 
 /// The file the daemons read when not given `--config`, if it exists (the
@@ -276,11 +275,13 @@ impl SlopeFile {
     }
 
     fn validate_mount(&self) -> Result<(), ConfigFileError> {
-        check_mount_info(&self.mount).map_err(|(key, value, range)| ConfigFileError::OutOfRange {
-            key: format!("mount.{key}"),
-            value: value.to_string(),
-            range,
-        })
+        self.mount
+            .check()
+            .map_err(|(key, value, range)| ConfigFileError::OutOfRange {
+                key: format!("mount.{key}"),
+                value: value.to_string(),
+                range,
+            })
     }
 }
 

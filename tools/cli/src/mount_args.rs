@@ -4,10 +4,7 @@
 
 use clap::Args;
 use slope_ipc_types::Mount;
-use slope_sensor::recording::MountInfo;
-
-/// Largest camera height accepted, metres.
-pub const MAX_HEIGHT_M: f64 = 10.0;
+use slope_sensor::recording::MountRange;
 
 /// The camera's pose on the robot; every value optional (unknown = NaN).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Args)]
@@ -54,58 +51,24 @@ impl MountArgs {
     }
 }
 
-/// The plausible range of each mount value: (what, low, high, low excluded).
-const HEIGHT: (&str, f64, f64, bool) = ("the mount height (m)", 0.0, MAX_HEIGHT_M, true);
-const PITCH: (&str, f64, f64, bool) = ("the mount pitch (degrees)", -90.0, 90.0, false);
-const ROLL: (&str, f64, f64, bool) = ("the mount roll (degrees)", -180.0, 180.0, false);
-
-fn in_range(value: f64, (what, lo, hi, open_lo): (&str, f64, f64, bool)) -> Result<f64, String> {
-    let above = if open_lo { value > lo } else { value >= lo };
-    if value.is_finite() && above && value <= hi {
-        Ok(value)
-    } else {
-        let lower = if open_lo { "above" } else { "at least" };
-        Err(format!(
-            "{what} must be {lower} {lo} and at most {hi}, not {value}"
-        ))
-    }
-}
-
-fn parse_in(text: &str, range: (&str, f64, f64, bool)) -> Result<f64, String> {
+fn parse_in(text: &str, range: MountRange) -> Result<f64, String> {
     let value: f64 = text
         .trim()
         .parse()
         .map_err(|_| format!("'{text}' is not a number"))?;
-    in_range(value, range)
+    range.check(value)
 }
 
 fn height_m(text: &str) -> Result<f64, String> {
-    parse_in(text, HEIGHT)
+    parse_in(text, MountRange::HEIGHT_M)
 }
 
 fn pitch_deg(text: &str) -> Result<f64, String> {
-    parse_in(text, PITCH)
+    parse_in(text, MountRange::PITCH_DEG)
 }
 
 fn roll_deg(text: &str) -> Result<f64, String> {
-    parse_in(text, ROLL)
-}
-
-/// Checks `[mount]` of a config file: every key given must be a finite
-/// value in the range the command line accepts (a key left out is unknown;
-/// `nan` is not a way to say so). The error is the first bad key
-/// (`height_m`, `pitch_deg` or `roll_deg`), its value and the reason.
-pub fn check_mount_info(mount: &MountInfo) -> Result<(), (&'static str, f64, String)> {
-    for (key, value, range) in [
-        ("height_m", mount.height_m, HEIGHT),
-        ("pitch_deg", mount.pitch_deg, PITCH),
-        ("roll_deg", mount.roll_deg, ROLL),
-    ] {
-        if let Some(value) = value {
-            in_range(value, range).map_err(|reason| (key, value, reason))?;
-        }
-    }
-    Ok(())
+    parse_in(text, MountRange::ROLL_DEG)
 }
 
 #[cfg(test)]
@@ -154,51 +117,5 @@ mod tests {
             assert!(parse(&args).is_err(), "{args:?} accepted");
         }
         assert!(parse(&["--mount-pitch-deg", "-90", "--mount-roll-deg", "180"]).is_ok());
-    }
-
-    #[test]
-    fn a_file_mount_is_checked_like_the_flags_and_nan_is_refused() {
-        assert_eq!(check_mount_info(&MountInfo::default()), Ok(()));
-        let good = MountInfo {
-            height_m: Some(0.4),
-            pitch_deg: Some(-90.0),
-            roll_deg: Some(180.0),
-        };
-        assert_eq!(check_mount_info(&good), Ok(()));
-        for (mount, key) in [
-            (
-                MountInfo {
-                    height_m: Some(-1.0),
-                    ..MountInfo::default()
-                },
-                "height_m",
-            ),
-            (
-                MountInfo {
-                    height_m: Some(f64::NAN),
-                    ..MountInfo::default()
-                },
-                "height_m",
-            ),
-            (
-                MountInfo {
-                    height_m: Some(0.4),
-                    pitch_deg: Some(f64::NAN),
-                    ..MountInfo::default()
-                },
-                "pitch_deg",
-            ),
-            (
-                MountInfo {
-                    roll_deg: Some(f64::INFINITY),
-                    ..MountInfo::default()
-                },
-                "roll_deg",
-            ),
-        ] {
-            let (bad, _, reason) = check_mount_info(&mount).expect_err("refused");
-            assert_eq!(bad, key, "{mount:?}");
-            assert!(reason.contains("must be"), "{reason}");
-        }
     }
 }
