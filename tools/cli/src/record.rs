@@ -551,6 +551,8 @@ pub fn record_topic(
                         mount: args.mount.over(header.mount),
                         source: CloudSource::from_raw(header.source).unwrap_or(CloudSource::Replay),
                         has_color: header.has_color != 0,
+                        // Not used: the sensor is named below.
+                        sensor: String::new(),
                     };
                     let sensor = match CloudSource::from_raw(header.source) {
                         Some(CloudSource::Camera) => "kinect2",
