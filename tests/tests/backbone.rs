@@ -8,47 +8,10 @@ use std::time::Duration;
 
 use nix::sys::signal::Signal;
 use serde_json::Value;
-use slope_integration_tests::{deadline, recording, unique_prefix, Proc};
+use slope_integration_tests::{
+    deadline, read_json_lines, recording, start_echo, start_estimator, unique_prefix, Proc,
+};
 use slope_sensor::recording::Recording;
-
-/// Starts an estimator and waits until it is subscribed.
-fn start_estimator(prefix: &str, extra: &[&str]) -> Proc {
-    let mut args = vec!["--service-prefix", prefix];
-    args.extend_from_slice(extra);
-    Proc::spawn("slope-estimator", &args).assert_ready("estimator ready")
-}
-
-/// Starts `slope-echo --json` and waits until it is subscribed.
-fn start_echo(prefix: &str, count: usize) -> Proc {
-    let count = count.to_string();
-    Proc::spawn(
-        "slope-echo",
-        [
-            "--json",
-            "--service-prefix",
-            prefix,
-            "--count",
-            &count,
-            "--timeout-s",
-            "120",
-        ],
-    )
-    .assert_ready("subscribed to estimates")
-}
-
-fn read_json_lines(echo: &mut Proc, count: usize, seconds: f64) -> Vec<Value> {
-    let until = deadline(seconds);
-    let mut lines = Vec::new();
-    while lines.len() < count {
-        let Some(line) = echo.stdout_line(until) else {
-            break;
-        };
-        let value: Value = serde_json::from_str(&line)
-            .unwrap_or_else(|e| panic!("slope-echo printed invalid JSON {line:?}: {e}"));
-        lines.push(value);
-    }
-    lines
-}
 
 /// Every key of `slope-echo --json`: the fields of `slope.SlopeEstimate.v2`.
 const ECHO_KEYS: [&str; 28] = [
