@@ -4,6 +4,8 @@
 
 use iceoryx2::prelude::ZeroCopySend;
 
+use crate::text::{text_of, write_text};
+
 /// Which daemon sent a health message.
 #[repr(u32)]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -229,24 +231,6 @@ impl Default for Health {
             last_error: [0; LAST_ERROR_LEN],
         }
     }
-}
-
-/// The text before the first NUL (up to the last whole character).
-fn text_of(bytes: &[u8]) -> &str {
-    let end = bytes.iter().position(|&b| b == 0).unwrap_or(bytes.len());
-    match std::str::from_utf8(&bytes[..end]) {
-        Ok(text) => text,
-        Err(err) => std::str::from_utf8(&bytes[..err.valid_up_to()]).unwrap_or_default(),
-    }
-}
-
-/// Copies as much of `text` as fits (whole characters) into `to`.
-fn write_text(to: &mut [u8], text: &str) {
-    let mut end = text.len().min(to.len());
-    while !text.is_char_boundary(end) {
-        end -= 1;
-    }
-    to[..end].copy_from_slice(&text.as_bytes()[..end]);
 }
 
 #[cfg(test)]

@@ -8,7 +8,7 @@
 //!
 //! | service (with the default prefix `slope`) | pattern | payload | user header |
 //! |---|---|---|---|
-//! | `slope/cloud` | publish-subscribe | `[CloudPoint]` (row-major, `width * height`) | [`CloudHeader`] |
+//! | `slope/cloud` | publish-subscribe | `[CloudPoint]` (row-major, `width * height`) | [`CloudHeader`] (`slope.CloudHeader.v2`) |
 //! | `slope/cloud` | event | "a new cloud was sent" | - |
 //! | `slope/estimate` | publish-subscribe | [`SlopeEstimate`] (`slope.SlopeEstimate.v2`) | - |
 //! | `slope/estimate` | event | "a new estimate was sent" | - |
@@ -20,8 +20,9 @@ pub mod confidence;
 mod estimate;
 mod health;
 mod services;
+mod text;
 
-pub use cloud::{CloudHeader, CloudPoint, CloudSource, Intrinsics, Mount};
+pub use cloud::{CloudHeader, CloudPoint, CloudSource, Intrinsics, Mount, SENSOR_NAME_LEN};
 pub use estimate::{EstimateStatus, SlopeEstimate, SlopeMethod};
 pub use health::{
     Health, HealthComponent, StageHealth, TimingStats, LAST_ERROR_LEN, MAX_STAGES, STAGE_NAME_LEN,

@@ -18,7 +18,9 @@ use iceoryx2::prelude::*;
 use iceoryx2::sample::Sample;
 use iceoryx2::service::port_factory::event::PortFactory as EventFactory;
 use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFactory;
-use slope_ipc_types::{now_ns, CloudHeader, CloudPoint, Health, ServiceNames, SlopeEstimate};
+use slope_ipc_types::{
+    now_ns, CloudHeader, CloudPoint, Health, ServiceNames, SlopeEstimate, SENSOR_NAME_LEN,
+};
 
 use crate::projection::Projector;
 use crate::source::{SourceFrame, SourceInfo};
@@ -220,6 +222,8 @@ pub struct CloudPublisher {
     notifier: Notifier<ipc::Service>,
     projector: Projector,
     info: SourceInfo,
+    /// `info.sensor` as the header field, encoded once.
+    sensor: [u8; SENSOR_NAME_LEN],
     name: String,
 }
 
@@ -265,6 +269,7 @@ impl CloudPublisher {
             publisher,
             notifier,
             projector,
+            sensor: CloudHeader::sensor_field(&info.sensor),
             info: info.clone(),
             name,
         })
@@ -315,6 +320,7 @@ impl CloudPublisher {
             mount: self.info.mount,
             source: self.info.source as u32,
             has_color: u32::from(color.is_some()),
+            sensor: self.sensor,
         };
         // Row by row straight into the sample: a third of the time of a
         // per-pixel `write_from_fn` (which divides each index into a row and

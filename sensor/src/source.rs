@@ -20,6 +20,10 @@ pub struct SourceInfo {
     pub mount: Mount,
     pub source: CloudSource,
     pub has_color: bool,
+    /// The sensor that takes the frames, as a recording's `sensor`
+    /// (`kinect2`, or a replayed recording's own name; empty when unknown):
+    /// every cloud header carries it.
+    pub sensor: String,
 }
 
 /// One frame, with buffers that a source reuses from call to call.
@@ -122,6 +126,7 @@ impl RecordingSource {
             mount: recording.mount(),
             source: CloudSource::Replay,
             has_color,
+            sensor: meta.sensor.clone(),
         };
         let pass_ns = match (frames.first(), frames.last()) {
             (Some(first), Some(last)) => {

@@ -335,3 +335,64 @@ pub fn read_notify_until(
 pub fn deadline(seconds: f64) -> Instant {
     Instant::now() + Duration::from_secs_f64(seconds)
 }
+
+/// Starts `slope-estimator` under `prefix` (with `extra` arguments) and
+/// waits until it is subscribed.
+pub fn start_estimator(prefix: &str, extra: &[&str]) -> Proc {
+    let mut args = vec!["--service-prefix", prefix];
+    args.extend_from_slice(extra);
+    Proc::spawn("slope-estimator", &args).assert_ready("estimator ready")
+}
+
+/// Starts `slope-echo --json` under `prefix` for `count` estimates and
+/// waits until it is subscribed.
+pub fn start_echo(prefix: &str, count: usize) -> Proc {
+    let count = count.to_string();
+    Proc::spawn(
+        "slope-echo",
+        [
+            "--json",
+            "--service-prefix",
+            prefix,
+            "--count",
+            &count,
+            "--timeout-s",
+            "120",
+        ],
+    )
+    .assert_ready("subscribed to estimates")
+}
+
+/// Up to `count` JSON lines of `echo`'s stdout, within `seconds`.
+pub fn read_json_lines(echo: &mut Proc, count: usize, seconds: f64) -> Vec<serde_json::Value> {
+    let until = deadline(seconds);
+    let mut lines = Vec::new();
+    while lines.len() < count {
+        let Some(line) = echo.stdout_line(until) else {
+            break;
+        };
+        let value: serde_json::Value = serde_json::from_str(&line)
+            .unwrap_or_else(|e| panic!("slope-echo printed invalid JSON {line:?}: {e}"));
+        lines.push(value);
+    }
+    lines
+}
+
+/// Runs `slope-eval --json --method METHOD` on `recordings` and returns one
+/// object per recording.
+pub fn eval_json(recordings: &[PathBuf], method: &str) -> Vec<serde_json::Value> {
+    let output = Command::new(binary("slope-eval"))
+        .args(["--json", "--quiet", "--method", method])
+        .args(recordings)
+        .output()
+        .expect("slope-eval runs");
+    assert!(
+        output.status.success(),
+        "slope-eval failed: {}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    String::from_utf8_lossy(&output.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("slope-eval prints JSON lines"))
+        .collect()
+}

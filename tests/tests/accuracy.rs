@@ -7,7 +7,7 @@
 use std::path::{Path, PathBuf};
 
 use serde_json::Value;
-use slope_integration_tests::{binary, shared_data};
+use slope_integration_tests::{binary, eval_json, shared_data};
 
 /// Renders a scene with `slope-synth` into `dir/name`.
 fn synth(dir: &Path, name: &str, args: &[&str]) -> PathBuf {
@@ -22,24 +22,6 @@ fn synth(dir: &Path, name: &str, args: &[&str]) -> PathBuf {
         .expect("slope-synth runs");
     assert!(status.success(), "slope-synth {args:?} failed");
     out
-}
-
-/// Runs `slope-eval --json` and returns one object per recording.
-fn eval(recordings: &[PathBuf], method: &str) -> Vec<Value> {
-    let output = std::process::Command::new(binary("slope-eval"))
-        .args(["--json", "--quiet", "--method", method])
-        .args(recordings)
-        .output()
-        .expect("slope-eval runs");
-    assert!(
-        output.status.success(),
-        "slope-eval failed: {}",
-        String::from_utf8_lossy(&output.stderr)
-    );
-    String::from_utf8_lossy(&output.stdout)
-        .lines()
-        .map(|l| serde_json::from_str(l).expect("slope-eval prints JSON lines"))
-        .collect()
 }
 
 fn summary_error(result: &Value) -> f64 {
@@ -74,7 +56,7 @@ fn paper_method_is_within_0_3_degrees_on_simulated_kinect_scenes() {
         "ramp16-side-walls",
         &["--slope", "16", "--distance", "1.5", "--side-walls", "1.0"],
     ));
-    let results = eval(&scenes, "paper");
+    let results = eval_json(&scenes, "paper");
     assert_eq!(results.len(), scenes.len());
     let mut report = Vec::new();
     for result in &results {
@@ -114,7 +96,7 @@ fn real_kinect_frames_come_out_within_2_5_degrees_of_their_built_90() {
         eprintln!("skipped: ../shared/data is not beside this checkout");
         return;
     }
-    let results = eval(&recordings, "paper");
+    let results = eval_json(&recordings, "paper");
     let report: Vec<String> = results
         .iter()
         .map(|r| {

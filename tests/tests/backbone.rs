@@ -8,47 +8,11 @@ use std::time::Duration;
 
 use nix::sys::signal::Signal;
 use serde_json::Value;
-use slope_integration_tests::{deadline, recording, unique_prefix, Proc};
+use slope_integration_tests::{
+    deadline, eval_json, read_json_lines, recording, shared_data, start_echo, start_estimator,
+    unique_prefix, Proc,
+};
 use slope_sensor::recording::Recording;
-
-/// Starts an estimator and waits until it is subscribed.
-fn start_estimator(prefix: &str, extra: &[&str]) -> Proc {
-    let mut args = vec!["--service-prefix", prefix];
-    args.extend_from_slice(extra);
-    Proc::spawn("slope-estimator", &args).assert_ready("estimator ready")
-}
-
-/// Starts `slope-echo --json` and waits until it is subscribed.
-fn start_echo(prefix: &str, count: usize) -> Proc {
-    let count = count.to_string();
-    Proc::spawn(
-        "slope-echo",
-        [
-            "--json",
-            "--service-prefix",
-            prefix,
-            "--count",
-            &count,
-            "--timeout-s",
-            "120",
-        ],
-    )
-    .assert_ready("subscribed to estimates")
-}
-
-fn read_json_lines(echo: &mut Proc, count: usize, seconds: f64) -> Vec<Value> {
-    let until = deadline(seconds);
-    let mut lines = Vec::new();
-    while lines.len() < count {
-        let Some(line) = echo.stdout_line(until) else {
-            break;
-        };
-        let value: Value = serde_json::from_str(&line)
-            .unwrap_or_else(|e| panic!("slope-echo printed invalid JSON {line:?}: {e}"));
-        lines.push(value);
-    }
-    lines
-}
 
 /// Every key of `slope-echo --json`: the fields of `slope.SlopeEstimate.v2`.
 const ECHO_KEYS: [&str; 28] = [
@@ -339,6 +303,104 @@ fn estimator_reads_the_cloud_in_the_publishers_shared_memory() {
     for proc in [&mut replay, &mut estimator] {
         proc.signal(Signal::SIGTERM);
         proc.assert_exits_zero_within(Duration::from_secs(1));
+    }
+}
+
+/// The chain judges a cloud as `slope-eval` judges the recording it came
+/// from: the cloud header names the sensor, and the estimator takes that
+/// sensor's noise model as slope-eval does from `recording.toml`. One
+/// estimator sees the recordings one after another (synthetic, Kinect v2,
+/// Kinect v1, Kinect v2), so it must switch models as the sensor changes,
+/// once per change and not per frame. The real frames come from
+/// ../shared/data when it is there (the Kinect v1 office is the one whose
+/// answer depends on the model).
+#[test]
+fn the_chain_gives_what_slope_eval_gives_whatever_the_sensor() {
+    let mut recordings = vec![recording("ramp16-clean")];
+    recordings.extend(
+        [
+            "kinect2-stairs-front",
+            "kinect1-office",
+            "kinect2-stairs-top",
+        ]
+        .iter()
+        .filter_map(|name| shared_data(name)),
+    );
+    if recordings.len() == 1 {
+        eprintln!("../shared/data is not beside this checkout: the bundled recording only");
+    }
+    let reports = eval_json(&recordings, "paper");
+    assert_eq!(reports.len(), recordings.len());
+    let total: usize = reports
+        .iter()
+        .map(|r| r["estimates"].as_array().expect("estimates").len())
+        .sum();
+    let prefix = unique_prefix("chain-vs-eval");
+    let mut echo = start_echo(&prefix, total);
+    let mut estimator = start_estimator(&prefix, &["--method", "paper"]);
+    for (dir, report) in recordings.iter().zip(&reports) {
+        let expected = report["estimates"].as_array().expect("estimates");
+        let mut replay = Proc::spawn(
+            "slope-replay",
+            [
+                dir.to_str().expect("utf-8 path"),
+                "--service-prefix",
+                &prefix,
+                "--rate",
+                "5",
+                "--wait-subscribers",
+                "1",
+                "--wait-timeout-s",
+                "20",
+            ],
+        );
+        let published = read_json_lines(&mut echo, expected.len(), 120.0);
+        replay.assert_exits_zero_within(Duration::from_secs(10));
+        assert_eq!(
+            published.len(),
+            expected.len(),
+            "{}: one estimate per frame
+{}",
+            dir.display(),
+            estimator.diagnostics()
+        );
+        for (e, x) in published.iter().zip(expected) {
+            let what = format!(
+                "{}: published {e}
+slope-eval {x}",
+                dir.display()
+            );
+            assert_eq!(e["frame"], x["index"], "{what}");
+            assert_eq!(e["status"], x["status"], "{what}");
+            for key in ["slope_deg", "confidence"] {
+                let (found, wanted) = (e[key].as_f64(), x[key].as_f64());
+                match (found, wanted) {
+                    (Some(found), Some(wanted)) => {
+                        assert!((found - wanted).abs() <= 1e-6, "{key}: {what}")
+                    }
+                    (found, wanted) => assert_eq!(found, wanted, "{key}: {what}"),
+                }
+            }
+        }
+    }
+    echo.assert_exits_zero_within(Duration::from_secs(5));
+    estimator.signal(Signal::SIGTERM);
+    estimator.assert_exits_zero_within(Duration::from_secs(1));
+    let switches: Vec<&String> = estimator
+        .stderr_lines()
+        .iter()
+        .filter(|l| l.contains("clouds from a new sensor"))
+        .collect();
+    assert_eq!(
+        switches.len(),
+        recordings.len(),
+        "one switch per recording, none per frame: {switches:#?}"
+    );
+    if recordings.iter().any(|r| r.ends_with("kinect1-office")) {
+        assert!(
+            switches.iter().any(|l| l.contains("kinect1")),
+            "{switches:#?}"
+        );
     }
 }
 

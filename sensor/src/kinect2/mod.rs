@@ -40,4 +40,4 @@ pub use device::{
 pub use error::{Kinect2Error, ShimStatus};
 pub use log::{depth_pipeline_errors, LOG_TARGET};
 pub use registration::{validate_params, Registration, DEPTH_PIXELS};
-pub use source::{CaptureStats, Kinect2Options, Kinect2Source};
+pub use source::{CaptureStats, Kinect2Options, Kinect2Source, SENSOR_NAME};

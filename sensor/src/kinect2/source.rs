@@ -94,6 +94,10 @@ pub struct CaptureStats {
     pub failed_opens: u64,
 }
 
+/// The sensor name of the Kinect v2's frames (a recording's `sensor`, a
+/// cloud header's `sensor`).
+pub const SENSOR_NAME: &str = "kinect2";
+
 /// Slice of every blocking wait, so that a stop request is seen quickly.
 pub const WAIT_SLICE: Duration = Duration::from_millis(200);
 
@@ -199,6 +203,7 @@ impl Kinect2Source {
             mount: options.mount,
             source: CloudSource::Camera,
             has_color: options.color,
+            sensor: SENSOR_NAME.to_string(),
         };
         tracing::info!(
             serial,

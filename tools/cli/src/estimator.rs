@@ -11,7 +11,9 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Parser;
-use slope_ipc_types::{HealthComponent, ServiceNames, SlopeEstimate, SlopeMethod};
+use slope_ipc_types::{
+    CloudHeader, HealthComponent, ServiceNames, SlopeEstimate, SlopeMethod, SENSOR_NAME_LEN,
+};
 use slope_pipeline::{parse_method, CloudView, Estimator, EstimatorConfig, FrameInfo};
 use slope_sensor::ipc::{create_node, CloudSubscriber, EstimatePublisher, HealthPublisher};
 use slope_sensor::publish::StopFlag;
@@ -182,7 +184,9 @@ fn estimate(
         "estimator ready"
     );
     let mut worker = Worker {
-        estimator: Estimator::new(config),
+        estimator: Estimator::new(config.clone().for_sensor("")),
+        config,
+        sensor: [0; SENSOR_NAME_LEN],
         subscriber: &subscriber,
         publisher: &publisher,
         stats: EstimatorStats::default(),
@@ -223,7 +227,14 @@ fn estimate(
 }
 
 struct Worker<'a> {
+    /// The estimator for the clouds of [`Worker::sensor`].
     estimator: Estimator,
+    /// The settings in effect, before a sensor's noise model fills an unset
+    /// `selection.noise_model`.
+    config: EstimatorConfig,
+    /// The cloud header's sensor field the estimator was built for (all 0:
+    /// no name).
+    sensor: [u8; SENSOR_NAME_LEN],
     subscriber: &'a CloudSubscriber,
     publisher: &'a EstimatePublisher,
     stats: EstimatorStats,
@@ -256,6 +267,23 @@ impl Worker<'_> {
             .is_some_and(|max| self.stats.processed >= max)
     }
 
+    /// Rebuilds the estimator for the sensor of `header`, as slope-eval
+    /// configures it for a recording's `sensor`: its noise model unless the
+    /// config sets one. A new estimator also starts a new track: the slope
+    /// of another sensor's stream is not followed on from this one's.
+    fn use_sensor(&mut self, header: &CloudHeader) {
+        let name = header.sensor_name();
+        let config = self.config.clone().for_sensor(name);
+        tracing::info!(
+            sensor = name,
+            noise_model = config.selection.noise_model.unwrap_or_default().name(),
+            frame = header.frame_index,
+            "clouds from a new sensor; estimator set up for it"
+        );
+        self.estimator = Estimator::new(config);
+        self.sensor = header.sensor;
+    }
+
     fn on_cloud_event(&mut self) -> anyhow::Result<()> {
         let (sample, skipped) = self.subscriber.receive_newest()?;
         let Some(sample) = sample else {
@@ -263,6 +291,9 @@ impl Worker<'_> {
         };
         let header = *sample.header();
         let points = sample.points();
+        if header.sensor != self.sensor {
+            self.use_sensor(&header);
+        }
         // Frames the queue overwrote before we saw them show up as gaps.
         let gap = match self.last_index {
             Some(last) if header.frame_index > last => header.frame_index - last - 1,

@@ -248,9 +248,9 @@ fn mount_info(mount: &Mount) -> MountInfo {
 }
 
 /// The recording.toml of a stream.
-pub fn meta_for(info: &SourceInfo, sensor: &str) -> RecordingMeta {
+pub fn meta_for(info: &SourceInfo) -> RecordingMeta {
     RecordingMeta {
-        sensor: sensor.to_string(),
+        sensor: info.sensor.clone(),
         depth: DepthInfo {
             width: info.width,
             height: info.height,
@@ -262,6 +262,17 @@ pub fn meta_for(info: &SourceInfo, sensor: &str) -> RecordingMeta {
         },
         mount: mount_info(&info.mount),
         truth: TruthInfo::default(),
+    }
+}
+
+/// The sensor a recording of the topic names: the cloud header's, else
+/// (a header that names none) `kinect2` for camera clouds and `replay` for
+/// the rest.
+pub fn sensor_of(header: &CloudHeader) -> &str {
+    match (header.sensor_name(), CloudSource::from_raw(header.source)) {
+        ("", Some(CloudSource::Camera)) => "kinect2",
+        ("", _) => "replay",
+        (name, _) => name,
     }
 }
 
@@ -427,11 +438,11 @@ enum Sink {
 
 impl Sink {
     /// Creates the sink of `args` for clouds described by `info`.
-    fn create(args: &RecordArgs, info: &SourceInfo, sensor: &str) -> anyhow::Result<Self> {
+    fn create(args: &RecordArgs, info: &SourceInfo) -> anyhow::Result<Self> {
         let out = args.out_dir();
         Ok(match args.format() {
             RecordFormat::Recording => {
-                let mut recording = RecordingWriter::create(out, &meta_for(info, sensor), false)
+                let mut recording = RecordingWriter::create(out, &meta_for(info), false)
                     .with_context(|| format!("cannot create the recording {}", out.display()))?;
                 recording.set_compression(args.compression.into());
                 Sink::Recording(Box::new(recording))
@@ -551,17 +562,15 @@ pub fn record_topic(
                         mount: args.mount.over(header.mount),
                         source: CloudSource::from_raw(header.source).unwrap_or(CloudSource::Replay),
                         has_color: header.has_color != 0,
+                        sensor: sensor_of(&header).to_string(),
                     };
-                    let sensor = match CloudSource::from_raw(header.source) {
-                        Some(CloudSource::Camera) => "kinect2",
-                        _ => "replay",
-                    };
-                    let recording = Sink::create(args, &info, sensor)?;
+                    let recording = Sink::create(args, &info)?;
                     first_at = Some(Instant::now());
                     tracing::info!(
                         width = header.width,
                         height = header.height,
                         color = info.has_color,
+                        sensor = info.sensor,
                         "first cloud; recording"
                     );
                     let (recording, first) = writer.insert((recording, header));
@@ -571,11 +580,13 @@ pub fn record_topic(
             if header.width != first.width
                 || header.height != first.height
                 || header.intrinsics != first.intrinsics
+                || header.sensor != first.sensor
             {
                 stats.skipped += 1;
                 tracing::warn!(
                     frame = header.frame_index,
-                    "cloud with another size or intrinsics than the first; skipped"
+                    sensor = header.sensor_name(),
+                    "cloud with another size, intrinsics or sensor than the first; skipped"
                 );
                 continue;
             }
@@ -658,9 +669,8 @@ fn record_kinect(
             ..RecordStats::default()
         });
     };
-    let mut writer =
-        RecordingWriter::create(args.out_dir(), &meta_for(source.info(), "kinect2"), false)
-            .with_context(|| format!("cannot create the recording {}", args.out_dir().display()))?;
+    let mut writer = RecordingWriter::create(args.out_dir(), &meta_for(source.info()), false)
+        .with_context(|| format!("cannot create the recording {}", args.out_dir().display()))?;
     writer.set_compression(args.compression.into());
     tracing::info!(serial = source.serial(), out = %args.out_dir().display(), "recording the Kinect v2");
     let stats = record_source(&mut source, &mut writer, limits, stop);
@@ -841,8 +851,8 @@ mod tests {
         let mut source = RecordingSource::new(recording, false);
         let out = tempfile::tempdir().expect("tempdir");
         let dir = out.path().join("copy");
-        let mut writer = RecordingWriter::create(&dir, &meta_for(source.info(), "kinect2"), false)
-            .expect("writer");
+        let mut writer =
+            RecordingWriter::create(&dir, &meta_for(source.info()), false).expect("writer");
         let stats = record_source(
             &mut source,
             &mut writer,
@@ -855,6 +865,21 @@ mod tests {
         let copy = Recording::open(&dir).expect("copy");
         assert_eq!(copy.intrinsics(), source.info().intrinsics);
         assert_eq!(copy.read_depth(&copy.frames()[0]).expect("depth"), expected);
+    }
+
+    #[test]
+    fn the_recorded_sensor_is_the_headers_else_the_source_kind() {
+        let mut header = CloudHeader {
+            source: CloudSource::Replay as u32,
+            ..CloudHeader::default()
+        };
+        assert_eq!(sensor_of(&header), "replay");
+        header.set_sensor_name("kinect1");
+        assert_eq!(sensor_of(&header), "kinect1");
+        header.source = CloudSource::Camera as u32;
+        assert_eq!(sensor_of(&header), "kinect1");
+        header.set_sensor_name("");
+        assert_eq!(sensor_of(&header), "kinect2");
     }
 
     #[test]

@@ -123,6 +123,7 @@ pub fn run(args: &ReplayArgs, stop: &StopFlag) -> anyhow::Result<PublishStats> {
         frames,
         width = info.width,
         height = info.height,
+        sensor = info.sensor,
         service = publisher.service_name(),
         "replaying"
     );

@@ -112,6 +112,7 @@ fn the_capture_is_ready_after_its_first_cloud_and_reports_while_waiting_and_stre
         mount: Mount::UNKNOWN,
         source: CloudSource::Camera,
         has_color: false,
+        sensor: "fake-camera".into(),
     };
     let mut camera = FakeCamera {
         info: info.clone(),
