@@ -190,7 +190,7 @@ fn estimate(
         subscriber: &subscriber,
         publisher: &publisher,
         stats: EstimatorStats::default(),
-        last_index: None,
+        last_frame: None,
         last_slope_deg: None,
         max_frames: args.max_frames,
         health: HealthReporter::new(
@@ -226,6 +226,31 @@ fn estimate(
     Ok(worker.stats.clone())
 }
 
+/// Frames the queue overwrote before we saw them, from the gap in the
+/// frame index since the last cloud (`last`: its index and capture time):
+/// only within one stream, whose index grows and whose capture time moves
+/// on by at most [`STREAM_GAP_NS`]. A stream that starts again (a replay
+/// looped or restarted, a new camera) or a recording that skips indices
+/// after a pause drops nothing.
+fn index_gap(last: Option<(u64, u64)>, header: &CloudHeader) -> u64 {
+    match last {
+        Some((index, stamp_ns))
+            if header.frame_index > index
+                && header
+                    .capture_stamp_ns
+                    .checked_sub(stamp_ns)
+                    .is_some_and(|dt| dt <= STREAM_GAP_NS) =>
+        {
+            header.frame_index - index - 1
+        }
+        _ => 0,
+    }
+}
+
+/// The longest pause between two clouds of one stream, as the tracker's
+/// default `tracking.max_gap_s`.
+const STREAM_GAP_NS: u64 = 1_000_000_000;
+
 struct Worker<'a> {
     /// The estimator for the clouds of [`Worker::sensor`].
     estimator: Estimator,
@@ -238,7 +263,8 @@ struct Worker<'a> {
     subscriber: &'a CloudSubscriber,
     publisher: &'a EstimatePublisher,
     stats: EstimatorStats,
-    last_index: Option<u64>,
+    /// Index and capture time of the last cloud.
+    last_frame: Option<(u64, u64)>,
     /// The last `ok` slope, degrees.
     last_slope_deg: Option<f64>,
     max_frames: Option<u64>,
@@ -282,6 +308,8 @@ impl Worker<'_> {
         );
         self.estimator = Estimator::new(config);
         self.sensor = header.sensor;
+        // Another stream: its first index says nothing of drops.
+        self.last_frame = None;
     }
 
     fn on_cloud_event(&mut self) -> anyhow::Result<()> {
@@ -294,19 +322,15 @@ impl Worker<'_> {
         if header.sensor != self.sensor {
             self.use_sensor(&header);
         }
-        // Frames the queue overwrote before we saw them show up as gaps.
-        let gap = match self.last_index {
-            Some(last) if header.frame_index > last => header.frame_index - last - 1,
-            _ => 0,
-        };
+        let gap = index_gap(self.last_frame, &header);
         let missed = gap.max(skipped);
         if missed > 0 {
             tracing::debug!(frame = header.frame_index, missed, "dropped stale clouds");
         }
-        self.stats.dropped += missed;
-        self.health.monitor.frames_in(1 + missed);
+        self.stats.dropped = self.stats.dropped.saturating_add(missed);
+        self.health.monitor.frames_in(missed.saturating_add(1));
         self.health.monitor.dropped(missed);
-        self.last_index = Some(header.frame_index);
+        self.last_frame = Some((header.frame_index, header.capture_stamp_ns));
         tracing::debug!(
             frame = header.frame_index,
             points = points.len(),
@@ -401,5 +425,29 @@ mod tests {
         let err = effective_config(&parse(&["--config", missing.to_str().expect("utf-8")]))
             .expect_err("no such file");
         assert!(format!("{err:#}").contains("missing.toml"), "{err:#}");
+    }
+
+    /// Drops are counted from index gaps within one stream only, and a
+    /// jump to the largest index does not overflow (it panicked the
+    /// estimator: "attempt to add with overflow").
+    #[test]
+    fn index_gaps_count_as_drops_within_one_stream_only() {
+        let header = |index: u64, stamp_ms: u64| CloudHeader {
+            frame_index: index,
+            capture_stamp_ns: stamp_ms * 1_000_000,
+            ..CloudHeader::default()
+        };
+        let last = Some((10, 1_000_000_000));
+        assert_eq!(index_gap(None, &header(10, 1000)), 0);
+        assert_eq!(index_gap(last, &header(11, 1033)), 0);
+        assert_eq!(index_gap(last, &header(14, 1133)), 3);
+        assert_eq!(index_gap(last, &header(14, 2000)), 3);
+        // A new stream: the index starts again, or comes after a pause, or
+        // the clock went back.
+        assert_eq!(index_gap(last, &header(0, 1033)), 0);
+        assert_eq!(index_gap(last, &header(10, 1033)), 0);
+        assert_eq!(index_gap(last, &header(50, 2001)), 0);
+        assert_eq!(index_gap(last, &header(50, 999)), 0);
+        assert_eq!(index_gap(last, &header(u64::MAX, 1033)), u64::MAX - 11);
     }
 }

@@ -108,14 +108,18 @@ impl HealthMonitor {
 
     /// `n` frames came in.
     pub fn frames_in(&mut self, n: u64) {
-        self.totals.frames_in += n;
-        self.report.frames_in += n;
-        self.log.frames_in += n;
+        for count in [
+            &mut self.totals.frames_in,
+            &mut self.report.frames_in,
+            &mut self.log.frames_in,
+        ] {
+            *count = count.saturating_add(n);
+        }
     }
 
     /// `n` frames were lost (superseded, overwritten, failed to send).
     pub fn dropped(&mut self, n: u64) {
-        self.totals.frames_dropped += n;
+        self.totals.frames_dropped = self.totals.frames_dropped.saturating_add(n);
     }
 
     /// The camera was re-opened.
