@@ -9,6 +9,7 @@
 
 use core::time::Duration;
 use std::fmt::Debug;
+use std::io::ErrorKind;
 
 use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::port::notifier::Notifier;
@@ -43,11 +44,14 @@ pub const HEALTH_MAX_SUBSCRIBERS: usize = 8;
 /// Health reports a subscriber may hold unread (about 4 s of all daemons).
 pub const HEALTH_SUBSCRIBER_BUFFER: usize = 16;
 
-/// An iceoryx2 operation that failed, with the service it concerned.
+/// An iceoryx2 operation that failed, with the service (or node) it
+/// concerned.
 #[derive(Debug, thiserror::Error)]
-#[error("failed to {action} on service '{service}': {detail}")]
+#[error("failed to {action} on {kind} '{service}': {detail}")]
 pub struct IpcError {
     pub action: &'static str,
+    /// "service", or "node" for the process's own node.
+    pub kind: &'static str,
     pub service: String,
     pub detail: String,
 }
@@ -56,6 +60,7 @@ impl IpcError {
     fn new(action: &'static str, service: &str, detail: impl Debug) -> Self {
         Self {
             action,
+            kind: "service",
             service: service.to_string(),
             detail: format!("{detail:?}"),
         }
@@ -83,12 +88,18 @@ pub enum PublishFrameError {
 /// Creates the process's iceoryx2 node. Signal handling is left to the
 /// binaries (ctrlc), so iceoryx2 installs no handlers of its own.
 pub fn create_node(name: &str) -> Result<Node<ipc::Service>, IpcError> {
-    let node_name = NodeName::new(name).map_err(|e| IpcError::new("name the node", name, e))?;
+    let node_error = |action, detail: String| IpcError {
+        action,
+        kind: "node",
+        service: name.to_string(),
+        detail,
+    };
+    let node_name = NodeName::new(name).map_err(|e| node_error("name", format!("{e:?}")))?;
     let node = NodeBuilder::new()
         .name(&node_name)
         .signal_handling_mode(SignalHandlingMode::Disabled)
         .create::<ipc::Service>()
-        .map_err(|e| IpcError::new("create the node", name, e))?;
+        .map_err(|e| node_error("start iceoryx2", format!("{e:?}{}", root_path_hint())))?;
     // Resources of crashed processes would otherwise keep their ports
     // counted against the service limits.
     let cleanup = node.try_cleanup_dead_nodes();
@@ -108,6 +119,34 @@ fn service_name(name: &str) -> Result<ServiceName, IpcError> {
 type CloudService = PubSubFactory<ipc::Service, [CloudPoint], CloudHeader>;
 type EstimateService = PubSubFactory<ipc::Service, SlopeEstimate, ()>;
 type HealthService = PubSubFactory<ipc::Service, Health, ()>;
+
+/// Why iceoryx2 may have failed to create a node, when it is the usual
+/// reason: its root path (`/tmp/iceoryx2` by default) belongs to another
+/// user, whose processes created it. Empty otherwise.
+fn root_path_hint() -> String {
+    use std::os::unix::fs::MetadataExt;
+    let root = std::path::PathBuf::from(
+        iceoryx2::config::Config::global_config()
+            .global
+            .root_path()
+            .as_str(),
+    );
+    let denied = [root.clone(), root.join("nodes")]
+        .iter()
+        .any(|dir| std::fs::read_dir(dir).is_err_and(|e| e.kind() == ErrorKind::PermissionDenied));
+    if !denied {
+        return String::new();
+    }
+    let owner = std::fs::metadata(&root).map_or(String::from("another user"), |m| {
+        format!("user id {}", m.uid())
+    });
+    format!(
+        " ({} belongs to {owner}, whose slope processes created it: run every slope process and \
+         every subscriber as that user, the systemd units' user; iceoryx2's files are their \
+         owner's only)",
+        root.display()
+    )
+}
 
 fn cloud_service(node: &Node<ipc::Service>, name: &str) -> Result<CloudService, IpcError> {
     node.service_builder(&service_name(name)?)
@@ -390,6 +429,7 @@ impl<Payload: Debug + IceoryxSend + ?Sized + 'static, Header: Debug + ZeroCopySe
             .map_err(|e| match e {
                 SubscriberCreateError::ExceedsMaxSupportedSubscribers => IpcError {
                     action: "create a subscriber",
+                    kind: "service",
                     service: name.clone(),
                     detail: format!(
                         "the topic takes at most {max_subscribers} subscribers at once and has \

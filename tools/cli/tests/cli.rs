@@ -326,3 +326,54 @@ fn the_clients_prefix_help_names_no_config_flag() {
         assert!(stdout.contains("/etc/slope/slope.toml"), "{bin}: {stdout}");
     }
 }
+
+/// A subscriber started as another user than the slope processes (the
+/// first mistake the one-user trust model invites) is told so: iceoryx2's
+/// root path belongs to that user. It said "failed to create the node on
+/// service '...': InternalError". Needs root (to run as `nobody`).
+#[test]
+fn another_user_is_told_whose_files_iceoryx2_keeps() {
+    let uid = Command::new("id").arg("-u").output().map(|o| o.stdout);
+    let root = uid.is_ok_and(|id| id.trim_ascii() == b"0");
+    if !root || Command::new("runuser").arg("--help").output().is_err() {
+        eprintln!("skipped: needs root and runuser to start a program as nobody");
+        return;
+    }
+    let echo = env!("CARGO_BIN_EXE_slope-echo");
+    let prefix = format!("cli-user-{}", std::process::id());
+    // As root first: iceoryx2's root path exists, and is root's.
+    let (ok, _, stderr) = run(
+        echo,
+        &[
+            "--service-prefix",
+            &prefix,
+            "--count",
+            "1",
+            "--timeout-s",
+            "0.05",
+        ],
+    );
+    assert!(!ok && stderr.contains("estimates arrived"), "{stderr}");
+    let (ok, _, stderr) = run(
+        "runuser",
+        &[
+            "-u",
+            "nobody",
+            "--",
+            echo,
+            "--service-prefix",
+            &prefix,
+            "--count",
+            "1",
+            "--timeout-s",
+            "1",
+        ],
+    );
+    assert!(!ok);
+    assert!(
+        stderr.contains("failed to start iceoryx2 on node 'slope-echo-")
+            && stderr.contains("belongs to user id 0")
+            && stderr.contains("run every slope process and every subscriber as that user"),
+        "{stderr}"
+    );
+}
