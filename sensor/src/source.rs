@@ -111,6 +111,9 @@ pub struct RecordingSource {
     pass_frames: u64,
     /// Whether the current pass has yielded a good frame yet.
     good_in_pass: bool,
+    /// Frames published without colour because their colour image could
+    /// not be read (the first is logged as a warning, the others at debug).
+    bad_colors: u64,
 }
 
 impl RecordingSource {
@@ -153,6 +156,7 @@ impl RecordingSource {
             pass_ns,
             pass_frames,
             good_in_pass: false,
+            bad_colors: 0,
         }
     }
 
@@ -215,7 +219,24 @@ impl FrameSource for RecordingSource {
         self.recording
             .read_depth_into(entry, &mut frame.depth)
             .map_err(bad)?;
-        frame.color = self.recording.read_color(entry).map_err(bad)?;
+        // The colour is optional: a frame whose colour image cannot be read
+        // is published without it (rgb 0), as slope-eval and slope-convert
+        // read it.
+        frame.color = match self.recording.read_color(entry) {
+            Ok(color) => color,
+            Err(err) => {
+                self.bad_colors += 1;
+                if self.bad_colors == 1 {
+                    tracing::warn!(
+                        frame = entry.index,
+                        "published without colour: {err} (further frames like it are logged at debug)"
+                    );
+                } else {
+                    tracing::debug!(frame = entry.index, "published without colour: {err}");
+                }
+                None
+            }
+        };
         frame.index = index;
         frame.source_stamp_ns = stamp;
         frame.capture_stamp_ns = 0;
@@ -302,6 +323,29 @@ mod tests {
             indices(&mut source, 10),
             vec![(0, 0), (u64::MAX - 1, u64::MAX), (u64::MAX, u64::MAX)]
         );
+    }
+
+    /// A colour image that cannot be read costs the frame its colour, not
+    /// the frame (replay stopped on it, good depth and all).
+    #[test]
+    fn an_unreadable_colour_image_leaves_the_frame_without_colour() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let rec = recording_with_rows(
+            &dir.path().join("r"),
+            "index,timestamp_ns,depth,color\n0,0,depth/000000.png,depth/000000.png\n\
+             1,100,depth/000001.png,color/missing.png\n",
+        );
+        let mut source = RecordingSource::new(rec, false);
+        assert!(source.info().has_color);
+        let mut frame = SourceFrame::default();
+        for index in [0, 1] {
+            assert!(source.next_frame(&mut frame).expect("a frame"), "{index}");
+            assert_eq!(frame.index, index);
+            assert_eq!(frame.depth.data, [1000, 0, 2000, 3000]);
+            assert!(frame.color.is_none());
+        }
+        assert_eq!(source.bad_colors, 2);
+        assert!(!source.next_frame(&mut frame).expect("the end"));
     }
 
     #[test]

@@ -71,9 +71,10 @@ pub struct ReplayArgs {
     )]
     pub wait_timeout: Option<f64>,
 
-    /// Skip frames whose images are missing or broken (with a warning)
-    /// instead of stopping with an error. A recording none of whose frames
-    /// can be read is still an error.
+    /// Skip frames whose depth images are missing or broken (with a
+    /// warning) instead of stopping with an error. A recording none of whose
+    /// frames can be read is still an error. (A colour image that cannot be
+    /// read is always a warning: that frame is published without colour.)
     #[arg(long)]
     pub skip_bad_frames: bool,
 
