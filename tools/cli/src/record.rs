@@ -19,8 +19,8 @@ use slope_ipc_types::{CloudHeader, CloudPoint, CloudSource, Mount};
 use slope_sensor::ipc::{create_node, CloudSubscriber, EstimateSubscriber};
 use slope_sensor::publish::StopFlag;
 use slope_sensor::recording::{
-    ColorImage, DepthImage, DepthInfo, MountInfo, PngCompression, RecordingMeta, RecordingWriter,
-    TruthInfo,
+    ColorImage, DepthImage, DepthInfo, MountInfo, PngCompression, Recording, RecordingMeta,
+    RecordingWriter, TruthInfo,
 };
 use slope_sensor::source::{FrameSource, SourceFrame, SourceInfo};
 
@@ -358,8 +358,9 @@ impl Timeline {
 }
 
 /// Makes sure `dir` can take a new recording before anything is waited
-/// for: an empty directory, or one that does not exist yet (then created).
-/// Returns whether it was created.
+/// for: an empty directory, or one that does not exist yet in a directory
+/// that does (then created; a typing error in a parent is refused, not
+/// created). Returns whether it was created.
 pub fn prepare_out_dir(dir: &Path) -> anyhow::Result<bool> {
     match std::fs::read_dir(dir) {
         Ok(mut entries) => {
@@ -372,7 +373,14 @@ pub fn prepare_out_dir(dir: &Path) -> anyhow::Result<bool> {
             Ok(false)
         }
         Err(err) if err.kind() == std::io::ErrorKind::NotFound => {
-            std::fs::create_dir_all(dir)
+            let parent = dir.parent().filter(|p| !p.as_os_str().is_empty());
+            if parent.is_some_and(|p| !p.is_dir()) {
+                anyhow::bail!(
+                    "cannot create the output directory {}: its directory does not exist",
+                    dir.display()
+                );
+            }
+            std::fs::create_dir(dir)
                 .with_context(|| format!("cannot create the output directory {}", dir.display()))?;
             Ok(true)
         }
@@ -705,13 +713,14 @@ pub fn run(args: &RecordArgs, stop: &StopFlag) -> anyhow::Result<RecordStats> {
         RecordSource::Topic => record_topic(args, &limits, stop),
         RecordSource::Kinect => record_kinect(args, &limits, stop),
     };
-    if created && is_empty_dir(args.out_dir()) {
+    let out = args.out_dir();
+    if created && is_empty_dir(out) {
         // Nothing was recorded into the directory we made: leave no trace.
-        if let Err(err) = std::fs::remove_dir(args.out_dir()) {
+        if let Err(err) = std::fs::remove_dir(out) {
             tracing::debug!(error = %err, "could not remove the empty output directory");
         }
     }
-    let stats = result?;
+    let stats = result.map_err(|err| explain_failure(err, out, created))?;
     tracing::info!(
         written = stats.written,
         missed = stats.missed,
@@ -760,6 +769,38 @@ fn record_mcap(
         "recording finished"
     );
     Ok(stats)
+}
+
+/// A failed recording's error, saying what is left in `out`: the frames
+/// recorded before (a valid recording), or nothing (a directory this run
+/// `created` and whose first frame failed, a full disk, is removed).
+fn explain_failure(err: anyhow::Error, out: &Path, created: bool) -> anyhow::Error {
+    match frames_recorded(out) {
+        Some(0) if created => match std::fs::remove_dir_all(out) {
+            Ok(()) => err.context(format!(
+                "no frame was recorded; {} was removed",
+                out.display()
+            )),
+            Err(_) => err.context(format!(
+                "no frame was recorded; remove {} by hand",
+                out.display()
+            )),
+        },
+        Some(frames) if frames > 0 => err.context(format!(
+            "{} holds the {frames} frame(s) recorded before, a valid recording",
+            out.display()
+        )),
+        _ => err,
+    }
+}
+
+/// The frames a recording directory lists (`None` when it holds no
+/// readable recording).
+fn frames_recorded(dir: &Path) -> Option<usize> {
+    match Recording::open(dir) {
+        Ok(recording) => Some(recording.frames().len()),
+        Err(_) => dir.join("recording.toml").is_file().then_some(0),
+    }
 }
 
 fn is_empty_dir(dir: &Path) -> bool {
@@ -917,6 +958,14 @@ mod tests {
     fn the_output_directory_is_checked_before_waiting() {
         let tmp = tempfile::tempdir().expect("tempdir");
         let fresh = tmp.path().join("a/b");
+        // A missing parent (a typing error) is refused, and nothing made.
+        let message = prepare_out_dir(&fresh).expect_err("no a/").to_string();
+        assert!(
+            message.contains("its directory does not exist"),
+            "{message}"
+        );
+        assert!(!tmp.path().join("a").exists());
+        std::fs::create_dir(tmp.path().join("a")).expect("mkdir a");
         assert!(prepare_out_dir(&fresh).expect("created"));
         assert!(fresh.is_dir());
         assert!(!prepare_out_dir(&fresh).expect("empty is fine"));
@@ -924,6 +973,59 @@ mod tests {
         let message = prepare_out_dir(&fresh).expect_err("not empty").to_string();
         assert!(message.contains("not empty"), "{message}");
         assert!(prepare_out_dir(&fresh.join("x")).is_err());
+    }
+
+    /// A recording that failed says what is left: its first frame failed
+    /// (a full disk), so the directory it made is removed; or the frames
+    /// before the failure, readable.
+    #[test]
+    fn a_failed_recording_says_what_it_left() {
+        let tmp = tempfile::tempdir().expect("tempdir");
+        let dir = tmp.path().join("rec");
+        let info = SourceInfo {
+            width: 2,
+            height: 2,
+            intrinsics: Intrinsics {
+                fx: 1.0,
+                fy: 1.0,
+                cx: 0.5,
+                cy: 0.5,
+            },
+            unit_m: 0.001,
+            mount: Mount::UNKNOWN,
+            source: CloudSource::Replay,
+            has_color: false,
+            sensor: "kinect2".into(),
+        };
+        // Its recording.toml and frames.csv header, no frame.
+        RecordingWriter::create(&dir, &meta_for(&info), false).expect("create");
+        let failure = || anyhow::anyhow!("cannot write frame 0: No space left on device");
+        let message = format!("{:#}", explain_failure(failure(), &dir, true));
+        assert!(message.contains("no frame was recorded; ") && message.contains("was removed"));
+        assert!(message.contains("No space left on device"), "{message}");
+        assert!(!dir.exists());
+
+        let mut writer = RecordingWriter::create(&dir, &meta_for(&info), false).expect("again");
+        let depth = DepthImage {
+            width: 2,
+            height: 2,
+            data: vec![1000; 4],
+        };
+        for stamp in [0, 1] {
+            writer
+                .write_frame(stamp, &depth, None, None)
+                .expect("frame");
+        }
+        let message = format!("{:#}", explain_failure(failure(), &dir, true));
+        assert!(
+            message.contains("holds the 2 frame(s) recorded before"),
+            "{message}"
+        );
+        assert!(dir.join("frames.csv").is_file());
+        // A directory the user gave (not made here) is left as it is.
+        drop(writer);
+        let message = format!("{:#}", explain_failure(failure(), tmp.path(), false));
+        assert_eq!(message, "cannot write frame 0: No space left on device");
     }
 
     #[test]
