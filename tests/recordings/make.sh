@@ -15,11 +15,11 @@ export RUST_LOG="${RUST_LOG:-warn}"
 rm -rf "$here/ramp16" "$here/ramp16-clean"
 
 # 16° ascending ramp 1.5 m ahead, default mount, realistic Kinect v2 noise, 30 frames.
-"$SLOPE_SYNTH" --slope 16 --distance 1.5 --height 0.5 --pitch -20 --frames 30 --seed 7 \
+"$SLOPE_SYNTH" --slope 16 --distance 1.5 --mount-height-m 0.5 --mount-pitch-deg -20 --frames 30 --seed 7 \
     --compression high -o "$here/ramp16"
 
 # The same scene with every sensor effect off (exact geometry, mm quantisation), 10 frames.
-"$SLOPE_SYNTH" --slope 16 --distance 1.5 --height 0.5 --pitch -20 --frames 10 --seed 7 \
+"$SLOPE_SYNTH" --slope 16 --distance 1.5 --mount-height-m 0.5 --mount-pitch-deg -20 --frames 10 --seed 7 \
     --clean --compression high -o "$here/ramp16-clean"
 
 du -sh "$here"

@@ -43,9 +43,9 @@ fn paper_method_is_within_0_3_degrees_on_simulated_kinect_scenes() {
                 slope,
                 "--distance",
                 "1.5",
-                "--height",
+                "--mount-height-m",
                 "0.5",
-                "--pitch",
+                "--mount-pitch-deg",
                 "-20",
             ],
         ));

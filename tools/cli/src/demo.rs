@@ -87,7 +87,14 @@ pub struct DemoArgs {
     pub rate: Option<f64>,
 
     /// Give up if the chain produces nothing for this many seconds.
-    #[arg(long = "stall-timeout-s", alias = "stall-timeout", default_value_t = 20.0, value_parser = positive_f64)]
+    #[arg(
+        long = "stall-timeout-s",
+        alias = "stall-timeout",
+        value_name = "S",
+        allow_hyphen_values = true,
+        default_value_t = 20.0,
+        value_parser = positive_f64
+    )]
     pub stall_timeout: f64,
 
     #[command(flatten)]

@@ -61,7 +61,13 @@ pub struct EchoArgs {
 
     /// Exit after this many seconds: status 0 when no --count was given,
     /// non-zero when fewer than --count estimates arrived.
-    #[arg(long = "timeout-s", alias = "timeout", value_parser = positive_f64)]
+    #[arg(
+        long = "timeout-s",
+        alias = "timeout",
+        value_name = "S",
+        allow_hyphen_values = true,
+        value_parser = positive_f64
+    )]
     pub timeout: Option<f64>,
 
     #[command(flatten)]

@@ -75,6 +75,7 @@ pub struct EstimatorArgs {
         long = "health-interval-s",
         alias = "health-interval",
         value_name = "S",
+        allow_hyphen_values = true,
         value_parser = health_interval_arg
     )]
     pub health_interval: Option<f64>,

@@ -6,7 +6,11 @@
 //!   stay as a hidden alias), and no other visible flag is named `out...`;
 //! - `--max-frames` and `--count` refuse 0 with one message ([`max_frames_arg`]:
 //!   at least 1, no flag for no limit);
-//! - angles (`...-deg` flags, `DEG` values) take negative numbers.
+//! - angles (`...-deg` flags, `DEG` values) take negative numbers;
+//! - a flag named with its unit (`...-s`, `-ms`, `-m`, `-deg`, `-hz`,
+//!   `-mps`) shows that unit as its value (`S`, `MS`, `M`, `DEG`, `HZ`,
+//!   `M/S`) and takes a negative number as a value, so that its range check
+//!   answers (`--linger-s -1`), not "unexpected argument".
 //!
 //! [`max_frames_arg`]: crate::cli::max_frames_arg
 
@@ -53,12 +57,39 @@ pub fn violations(command: &Command) -> Vec<String> {
             || arg
                 .get_value_names()
                 .is_some_and(|names| names.iter().any(|n| n.as_str() == "DEG"));
+        let unit = UNITS.iter().find(|(suffix, _)| long.ends_with(suffix));
+        if let Some((suffix, value)) = unit {
+            let names = arg.get_value_names().unwrap_or_default();
+            if !names.iter().all(|n| n.as_str() == *value) || names.is_empty() {
+                found.push(format!(
+                    "{name}: --{long} shows <{}>, not its unit <{value}>",
+                    names
+                        .iter()
+                        .map(|n| n.as_str())
+                        .collect::<Vec<_>>()
+                        .join(" ")
+                ));
+            }
+            if *suffix != "-deg" {
+                found.extend(negative_taken(command, long));
+            }
+        }
         if angle && !long.is_empty() {
             found.extend(negative_taken(command, long));
         }
     }
     found
 }
+
+/// Flag-name suffixes that are units, and the value name each shows.
+const UNITS: [(&str, &str); 6] = [
+    ("-s", "S"),
+    ("-ms", "MS"),
+    ("-m", "M"),
+    ("-deg", "DEG"),
+    ("-hz", "HZ"),
+    ("-mps", "M/S"),
+];
 
 /// `--<long> 0` is refused with [`MAX_FRAMES_ZERO`].
 fn zero_refused(command: &Command, long: &str) -> Option<String> {
@@ -87,7 +118,7 @@ fn negative_taken(command: &Command, long: &str) -> Option<String> {
         .try_get_matches_from([name, flag.as_str(), "-5"])
     {
         Err(err) if matches!(err.kind(), ErrorKind::UnknownArgument | ErrorKind::NoEquals) => {
-            Some(format!("{name}: {flag} -5 is not taken (negative angles)"))
+            Some(format!("{name}: {flag} -5 is not taken as a value"))
         }
         _ => None,
     }
@@ -118,6 +149,12 @@ mod tests {
                 Arg::new("pitch")
                     .long("pitch-deg")
                     .value_parser(clap::value_parser!(f64)),
+            )
+            .arg(
+                Arg::new("linger")
+                    .long("linger-s")
+                    .value_name("LINGER")
+                    .value_parser(clap::value_parser!(f64)),
             );
         let found = violations(&bad);
         for expected in [
@@ -126,13 +163,16 @@ mod tests {
             "slope-bad: no --quiet",
             "slope-bad: --out-dir should be -o/--output",
             "slope-bad: --max-frames 0 is not refused as a bad value",
-            "slope-bad: --pitch-deg -5 is not taken (negative angles)",
+            "slope-bad: --pitch-deg -5 is not taken as a value",
+            "slope-bad: --pitch-deg shows <>, not its unit <DEG>",
+            "slope-bad: --linger-s shows <LINGER>, not its unit <S>",
+            "slope-bad: --linger-s -5 is not taken as a value",
         ] {
             assert!(
                 found.iter().any(|f| f == expected),
                 "{expected} not in {found:?}"
             );
         }
-        assert_eq!(found.len(), 6, "{found:?}");
+        assert_eq!(found.len(), 9, "{found:?}");
     }
 }

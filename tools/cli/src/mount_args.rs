@@ -14,6 +14,7 @@ pub struct MountArgs {
         id = "mount_height_m",
         long = "mount-height-m",
         value_name = "M",
+        allow_hyphen_values = true,
         value_parser = height_m
     )]
     pub height_m: Option<f64>,

@@ -126,17 +126,17 @@ pub struct RecordArgs {
     pub max_frames: Option<u64>,
 
     /// Stop after this many seconds from the first frame.
-    #[arg(long, value_parser = positive_f64)]
+    #[arg(long, value_name = "S", allow_hyphen_values = true, value_parser = positive_f64)]
     pub duration_s: Option<f64>,
 
     /// Topic: give up (non-zero exit) when no cloud arrives within this many
     /// seconds; waits forever when not given.
-    #[arg(long, value_parser = positive_f64)]
+    #[arg(long, value_name = "S", allow_hyphen_values = true, value_parser = positive_f64)]
     pub wait_timeout_s: Option<f64>,
 
     /// Topic: finish when no cloud has arrived for this many seconds after
     /// the first one (e.g. the replay ended).
-    #[arg(long, value_parser = positive_f64)]
+    #[arg(long, value_name = "S", allow_hyphen_values = true, value_parser = positive_f64)]
     pub idle_timeout_s: Option<f64>,
 
     /// The camera's pose for recording.toml's `[mount]` (topic: overrides

@@ -66,6 +66,8 @@ pub struct ReplayArgs {
     #[arg(
         long = "wait-timeout-s",
         alias = "wait-timeout",
+        value_name = "S",
+        allow_hyphen_values = true,
         value_parser = positive_f64,
         requires = "wait_subscribers"
     )]
@@ -80,7 +82,14 @@ pub struct ReplayArgs {
 
     /// Keep the publisher up this long after the last frame, so that
     /// subscribers still read what is queued for them (skipped on Ctrl-C).
-    #[arg(long = "linger-s", alias = "linger", default_value_t = 1.0, value_parser = positive_f64)]
+    #[arg(
+        long = "linger-s",
+        alias = "linger",
+        value_name = "S",
+        allow_hyphen_values = true,
+        default_value_t = 1.0,
+        value_parser = positive_f64
+    )]
     pub linger: f64,
 
     /// Largest cloud (width x height) to accept.

@@ -18,16 +18,16 @@ use crate::sensor_model::SensorModel;
 const EXAMPLES: &str = "\
 Examples:
   # The default scene: a 16° ramp up, 1.5 m ahead, camera 0.5 m high looking 20° down
-  slope-synth --slope 16 --distance 1.5 --height 0.5 --pitch -20 --frames 30 --seed 7 -o /tmp/ramp16
+  slope-synth --slope 16 --distance 1.5 --mount-height-m 0.5 --mount-pitch-deg -20 -o /tmp/ramp16
 
   # Exact geometry (no noise, no jitter, no dropouts) for tests
   slope-synth --slope 16 --clean --frames 10 -o /tmp/ramp16-clean
 
   # The ground drops away 8° from 1.2 m ahead; look down steeper to see it
-  slope-synth --slope 8 --descending --distance 1.2 --pitch -35 -o /tmp/down8
+  slope-synth --slope 8 --descending --distance 1.2 --mount-pitch-deg -35 -o /tmp/down8
 
   # A wall 2 m ahead, seen at a 20° yaw, driving towards it at 0.3 m/s
-  slope-synth --slope 90 --distance 2 --yaw 20 --speed 0.3 -o /tmp/wall
+  slope-synth --slope 90 --distance 2 --yaw 20 --speed-mps 0.3 -o /tmp/wall
 
   # Everything else (boxes, side walls, tables, a ceiling, soft blocks, sensor
   # parameters) from a scene file; flags given on the command line override it
@@ -86,20 +86,46 @@ pub struct Args {
     #[arg(long, value_name = "DEG", allow_hyphen_values = true, value_parser = yaw_arg)]
     pub yaw: Option<f64>,
 
-    /// Camera's optical centre above the ground, metres.
-    #[arg(long, value_name = "M", allow_hyphen_values = true, value_parser = height_arg)]
+    /// Camera's optical centre above the ground, metres (`[mount]
+    /// height_m`).
+    #[arg(
+        long = "mount-height-m",
+        alias = "height",
+        value_name = "M",
+        allow_hyphen_values = true,
+        value_parser = height_arg
+    )]
     pub height: Option<f64>,
 
-    /// Camera pitch, degrees; negative looks down.
-    #[arg(long, value_name = "DEG", allow_hyphen_values = true, value_parser = pitch_arg)]
+    /// Camera pitch, degrees; negative looks down (`[mount] pitch_deg`).
+    #[arg(
+        long = "mount-pitch-deg",
+        alias = "pitch",
+        value_name = "DEG",
+        allow_hyphen_values = true,
+        value_parser = pitch_arg
+    )]
     pub pitch: Option<f64>,
 
-    /// Camera roll, degrees; positive dips the image's right side.
-    #[arg(long, value_name = "DEG", allow_hyphen_values = true, value_parser = roll_arg)]
+    /// Camera roll, degrees; positive dips the image's right side
+    /// (`[mount] roll_deg`).
+    #[arg(
+        long = "mount-roll-deg",
+        alias = "roll",
+        value_name = "DEG",
+        allow_hyphen_values = true,
+        value_parser = roll_arg
+    )]
     pub roll: Option<f64>,
 
     /// Forward speed of the camera between frames, metres per second.
-    #[arg(long, value_name = "M/S", allow_hyphen_values = true, value_parser = speed_arg)]
+    #[arg(
+        long = "speed-mps",
+        alias = "speed",
+        value_name = "M/S",
+        allow_hyphen_values = true,
+        value_parser = speed_arg
+    )]
     pub speed: Option<f64>,
 
     /// Add two side walls 1 m high at x = -M and x = +M, from 0 to 6 m ahead.
@@ -189,7 +215,7 @@ impl Args {
         Ok((scene, model))
     }
 
-    /// `--height`, `--pitch`, `--roll`, `--speed` and `--side-walls`.
+    /// The mount flags, `--speed-mps` and `--side-walls`.
     fn apply_camera_and_wall_flags(&self, scene: &mut Scene) {
         if let Some(h) = self.height {
             scene.mount.height_m = h;
@@ -416,9 +442,9 @@ mod tests {
             "16",
             "--distance",
             "1.5",
-            "--height",
+            "--mount-height-m",
             "0.5",
-            "--pitch",
+            "--mount-pitch-deg",
             "-20",
             "--frames",
             "30",

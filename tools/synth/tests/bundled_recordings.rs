@@ -26,7 +26,7 @@ fn bundled(name: &str) -> Recording {
 
 fn check(name: &str, model: &SensorModel, seed: u64, frames: usize) {
     let rec = bundled(name);
-    // `--slope 16 --distance 1.5 --height 0.5 --pitch -20` is the default ramp scene.
+    // `--slope 16 --distance 1.5 --mount-height-m 0.5 --mount-pitch-deg -20` is the default ramp scene.
     let scene = Scene::default_ramp();
     assert_eq!(rec.meta(), &recording_meta(&scene), "{name}: metadata");
     assert_eq!(rec.frames().len(), frames, "{name}: frame count");

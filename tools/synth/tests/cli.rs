@@ -13,6 +13,8 @@ fn synth() -> Command {
 fn writes_the_documented_default_scene() {
     let dir = tempfile::tempdir().expect("temp dir");
     let out = dir.path().join("ramp");
+    // The mount by its older flag names, kept as aliases of
+    // --mount-height-m and --mount-pitch-deg.
     let status = synth()
         .args([
             "--slope",
@@ -98,10 +100,10 @@ fn out_of_range_values_are_named_by_flag_or_by_scene_key() {
     let dir = tempfile::tempdir().expect("temp dir");
     let out = dir.path().join("new");
     for (flag, value, key) in [
-        ("--pitch", "95", "mount.pitch_deg"),
-        ("--roll", "-90", "mount.roll_deg"),
-        ("--height", "0", "mount.height_m"),
-        ("--speed", "20", "motion.speed_mps"),
+        ("--mount-pitch-deg", "95", "mount.pitch_deg"),
+        ("--mount-roll-deg", "-90", "mount.roll_deg"),
+        ("--mount-height-m", "0", "mount.height_m"),
+        ("--speed-mps", "20", "motion.speed_mps"),
         ("--distance", "0", "ramp.distance_m"),
         ("--width", "nan", "ramp.width_m"),
         ("--length", "0", "ramp.length_m"),
@@ -109,7 +111,7 @@ fn out_of_range_values_are_named_by_flag_or_by_scene_key() {
         ("--yaw", "90", "ramp.yaw_deg"),
         ("--side-walls", "0", "x_m"),
         // Negative lengths are refused by their range, not taken for flags.
-        ("--height", "-1", "mount.height_m"),
+        ("--mount-height-m", "-1", "mount.height_m"),
         ("--distance", "-1", "ramp.distance_m"),
         ("--width", "-2", "ramp.width_m"),
         ("--length", "-2", "ramp.length_m"),
@@ -168,5 +170,5 @@ fn out_of_range_values_are_named_by_flag_or_by_scene_key() {
         err.contains("steep.toml: key `mount.pitch_deg`: must lie in (-90, 90)"),
         "{err}"
     );
-    assert!(!err.contains("--pitch"), "{err}");
+    assert!(!err.contains("--mount-pitch-deg"), "{err}");
 }
