@@ -77,7 +77,12 @@ pub struct CaptureArgs {
 
     /// Seconds between health reports on the topic PREFIX/health (0: none).
     /// Overrides `[health] interval_s` (default 1).
-    #[arg(long = "health-interval-s", value_name = "S", value_parser = health_interval_arg)]
+    #[arg(
+        long = "health-interval-s",
+        value_name = "S",
+        allow_hyphen_values = true,
+        value_parser = health_interval_arg
+    )]
     pub health_interval: Option<f64>,
 
     /// Serial number of the Kinect v2 to open (see --list); the first one if
@@ -100,11 +105,11 @@ pub struct CaptureArgs {
     pub gpu_device: Option<u32>,
 
     /// Drop depth nearer than this, metres (libfreenect2 default 0.5).
-    #[arg(long, value_parser = positive_f64)]
+    #[arg(long, value_name = "M", allow_hyphen_values = true, value_parser = positive_f64)]
     pub min_depth_m: Option<f64>,
 
     /// Drop depth beyond this, metres (libfreenect2 default 4.5).
-    #[arg(long, value_parser = positive_f64)]
+    #[arg(long, value_name = "M", allow_hyphen_values = true, value_parser = positive_f64)]
     pub max_depth_m: Option<f64>,
 
     /// libfreenect2's bilateral filter (removes flying pixels): true/false.
@@ -130,7 +135,7 @@ pub struct CaptureArgs {
 
     /// Seconds without a frame after which the device counts as lost and is
     /// reopened.
-    #[arg(long, value_parser = positive_f64)]
+    #[arg(long, value_name = "S", allow_hyphen_values = true, value_parser = positive_f64)]
     pub frame_timeout_s: Option<f64>,
 
     /// Stop after this many frames (at least 1).
