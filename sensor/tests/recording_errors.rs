@@ -276,6 +276,12 @@ fn missing_columns_are_named() {
         );
         assert_names(&err, &["frames.csv", column]);
     }
+    // An empty frames.csv: the message says what the first line holds.
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = base(&tmp);
+    write_csv(&dir, "");
+    let err = open_err(&dir);
+    assert_names(&err, &["frames.csv", "index,timestamp_ns,depth,color"]);
 }
 
 #[test]

@@ -67,8 +67,13 @@ pub enum RecordingError {
         reason: String,
     },
 
-    /// The header row of `frames.csv` lacks a required column.
-    #[error("{}: the header row has no column `{column}`", path.display())]
+    /// The header row of `frames.csv` lacks a required column (or the file
+    /// is empty).
+    #[error(
+        "{}: the header row has no column `{column}` (the first line names the columns: \
+         index,timestamp_ns,depth,color and optionally slope_deg)",
+        path.display()
+    )]
     MissingColumn { path: PathBuf, column: &'static str },
 
     /// A row of `frames.csv` is malformed (field count, a number that does

@@ -246,6 +246,13 @@ impl SlopeFile {
                 range,
             })
         };
+        if self.service_prefix.is_empty() {
+            return out_of_range(
+                "service_prefix",
+                &"\"\"",
+                format!("an empty prefix names no service; leave the key out for the default '{DEFAULT_SERVICE_PREFIX}'"),
+            );
+        }
         if let Err(reason) = prefix_arg(&self.service_prefix) {
             return out_of_range(
                 "service_prefix",
@@ -597,6 +604,11 @@ mod tests {
                 "service_prefix = \"/x\"\n",
                 "`service_prefix` = \"/x\"",
                 "no leading or trailing",
+            ),
+            (
+                "service_prefix = \"\"\n",
+                "`service_prefix` = \"\"",
+                "leave the key out for the default 'slope'",
             ),
             (
                 "[estimator.normals]\nneighbours = 2\n",
