@@ -81,14 +81,15 @@ pub struct ReplayArgs {
     pub skip_bad_frames: bool,
 
     /// Keep the publisher up this long after the last frame, so that
-    /// subscribers still read what is queued for them (skipped on Ctrl-C).
+    /// subscribers still read what is queued for them (skipped on Ctrl-C;
+    /// 0: end at once).
     #[arg(
         long = "linger-s",
         alias = "linger",
         value_name = "S",
         allow_hyphen_values = true,
         default_value_t = 1.0,
-        value_parser = positive_f64
+        value_parser = seconds_or_zero
     )]
     pub linger: f64,
 
@@ -105,6 +106,21 @@ pub struct ReplayArgs {
 pub const POSITIVE_RANGE: (f64, f64) = (1e-3, 1e7);
 
 /// Parses a positive number within [`POSITIVE_RANGE`].
+/// Seconds, 0 included, at most [`POSITIVE_RANGE`]'s upper end.
+fn seconds_or_zero(text: &str) -> Result<f64, String> {
+    let value: f64 = text
+        .parse()
+        .map_err(|_| format!("'{text}' is not a number"))?;
+    let max = POSITIVE_RANGE.1;
+    if (0.0..=max).contains(&value) {
+        Ok(value)
+    } else {
+        Err(format!(
+            "'{text}' must be a number of seconds from 0 to {max}"
+        ))
+    }
+}
+
 pub fn positive_f64(text: &str) -> Result<f64, String> {
     let value: f64 = text
         .parse()
@@ -205,5 +221,17 @@ mod tests {
         assert!(err.to_string().contains("--wait-subscribers"), "{err}");
         let args = parse(&["--wait-timeout-s", "1", "--wait-subscribers", "1"]).expect("valid");
         assert_eq!(args.wait_timeout, Some(1.0));
+    }
+
+    /// `--linger-s 0` ends at once (it was refused: "from 0.001"); a
+    /// negative linger is refused by its range.
+    #[test]
+    fn linger_takes_zero_and_refuses_negative() {
+        let parse =
+            |args: &[&str]| ReplayArgs::try_parse_from(["slope-replay", "rec"].iter().chain(args));
+        assert_eq!(parse(&["--linger-s", "0"]).expect("valid").linger, 0.0);
+        assert_eq!(parse(&[]).expect("valid").linger, 1.0);
+        let err = parse(&["--linger-s", "-1"]).expect_err("negative");
+        assert!(err.to_string().contains("from 0 to"), "{err}");
     }
 }
