@@ -309,6 +309,27 @@ pub fn replay_frames(
     )
 }
 
+/// Starts `slope-replay` on every frame of the recording in `dir` under
+/// `prefix`, at 5 Hz (slow enough for a debug-build estimator to take each
+/// one), once one subscriber (the estimator) is connected, giving up after
+/// 20 s without it.
+pub fn replay_all_at_5_hz(prefix: &str, dir: &Path) -> Proc {
+    Proc::spawn(
+        "slope-replay",
+        [
+            dir.to_str().expect("utf-8 path"),
+            "--service-prefix",
+            prefix,
+            "--rate",
+            "5",
+            "--wait-subscribers",
+            "1",
+            "--wait-timeout-s",
+            "20",
+        ],
+    )
+}
+
 /// Reads datagrams from a notify socket (what systemd would receive) into
 /// `seen` until a line of one starts with `until` or `by` passes; true when
 /// such a line was seen.

@@ -9,8 +9,8 @@ use std::time::Duration;
 use nix::sys::signal::Signal;
 use serde_json::Value;
 use slope_integration_tests::{
-    deadline, eval_json, read_json_lines, recording, shared_data, start_echo, start_estimator,
-    unique_prefix, Proc,
+    deadline, eval_json, read_json_lines, recording, replay_all_at_5_hz, shared_data, start_echo,
+    start_estimator, unique_prefix, Proc,
 };
 use slope_sensor::recording::Recording;
 
@@ -115,20 +115,7 @@ fn every_frame_gives_one_estimate_in_order_within_a_degree() {
 
     let mut echo = start_echo(&prefix, frames);
     let mut estimator = start_estimator(&prefix, &[]);
-    let mut replay = Proc::spawn(
-        "slope-replay",
-        [
-            dir.to_str().expect("utf-8 path"),
-            "--service-prefix",
-            &prefix,
-            "--rate",
-            "5",
-            "--wait-subscribers",
-            "1",
-            "--wait-timeout-s",
-            "20",
-        ],
-    );
+    let mut replay = replay_all_at_5_hz(&prefix, &dir);
 
     let estimates = read_json_lines(&mut echo, frames, 60.0);
     assert_eq!(
@@ -340,20 +327,7 @@ fn the_chain_gives_what_slope_eval_gives_whatever_the_sensor() {
     let mut estimator = start_estimator(&prefix, &["--method", "paper"]);
     for (dir, report) in recordings.iter().zip(&reports) {
         let expected = report["estimates"].as_array().expect("estimates");
-        let mut replay = Proc::spawn(
-            "slope-replay",
-            [
-                dir.to_str().expect("utf-8 path"),
-                "--service-prefix",
-                &prefix,
-                "--rate",
-                "5",
-                "--wait-subscribers",
-                "1",
-                "--wait-timeout-s",
-                "20",
-            ],
-        );
+        let mut replay = replay_all_at_5_hz(&prefix, dir);
         let published = read_json_lines(&mut echo, expected.len(), 120.0);
         replay.assert_exits_zero_within(Duration::from_secs(10));
         assert_eq!(

@@ -341,34 +341,19 @@ fn another_user_is_told_whose_files_iceoryx2_keeps() {
     }
     let echo = env!("CARGO_BIN_EXE_slope-echo");
     let prefix = format!("cli-user-{}", std::process::id());
+    let echo_args = [
+        "--service-prefix",
+        &prefix,
+        "--count",
+        "1",
+        "--timeout-s",
+        "0.5",
+    ];
     // As root first: iceoryx2's root path exists, and is root's.
-    let (ok, _, stderr) = run(
-        echo,
-        &[
-            "--service-prefix",
-            &prefix,
-            "--count",
-            "1",
-            "--timeout-s",
-            "0.05",
-        ],
-    );
+    let (ok, _, stderr) = run(echo, &echo_args);
     assert!(!ok && stderr.contains("estimates arrived"), "{stderr}");
-    let (ok, _, stderr) = run(
-        "runuser",
-        &[
-            "-u",
-            "nobody",
-            "--",
-            echo,
-            "--service-prefix",
-            &prefix,
-            "--count",
-            "1",
-            "--timeout-s",
-            "1",
-        ],
-    );
+    let as_nobody = [&["-u", "nobody", "--", echo][..], &echo_args].concat();
+    let (ok, _, stderr) = run("runuser", &as_nobody);
     assert!(!ok);
     assert!(
         stderr.contains("failed to start iceoryx2 on node 'slope-echo-")
