@@ -23,15 +23,20 @@
 //!   ramp.
 //! - **One stream, one track.** The track restarts when the frames stop
 //!   continuing one stream ([`StreamPosition::continues`]): the frame index
-//!   does not grow (a new stream, a replay started again or looped), the
+//!   does not grow (a new stream, a replay started again), the
 //!   capture time goes back or jumps by more than `max_gap_s` (the camera
-//!   paused or was restarted), or the image size or intrinsics change
-//!   (another camera). A slope tracked before a pause is not the slope of
+//!   paused or was restarted; 1.5 s, so that a replay at 1 Hz keeps its
+//!   track whatever its timing jitter), the index jumps further than the
+//!   time allows at [`MAX_FRAME_RATE_HZ`], or the image size or intrinsics
+//!   change (another camera). A slope tracked before a pause is not the slope of
 //!   what is ahead after it.
 //! - **Its own standard deviation.** `1.2533 sigma / sqrt(n)` (the standard
 //!   error of a median of n), sigma the larger of the window's robust spread
 //!   and the median of the frames' own errors (`slope_std_deg / sqrt(samples)`),
-//!   so a window of identical values does not claim zero error.
+//!   so a window of identical values does not claim zero error. Without
+//!   the frames' own errors (the least-squares and TLS baselines have no
+//!   spread), the window's spread once it holds 3 frames that differ; NaN
+//!   (unknown) before.
 
 use std::collections::VecDeque;
 
@@ -49,7 +54,7 @@ pub struct TrackedSlope {
     /// track).
     pub slope_deg: f64,
     /// Standard deviation of `slope_deg`, degrees (NaN when there is no
-    /// track).
+    /// track, or while it is unknown: see the module doc).
     pub std_deg: f64,
     /// Frames accepted into the track since it (re)started (0: no track).
     pub frames: u32,
@@ -75,7 +80,9 @@ pub struct TrackingConfig {
     /// Frames in a row without a usable estimate end the track.
     pub max_missed: usize,
     /// A longer pause between two frames' capture times, seconds, ends the
-    /// track (the same second as `max_missed` at 30 Hz).
+    /// track: 1.5 s, half a second more than `max_missed` frames at 30 Hz,
+    /// so that frames one second apart (`slope-replay --rate 1`) keep it
+    /// whatever their jitter.
     pub max_gap_s: f64,
 }
 
@@ -88,7 +95,7 @@ impl Default for TrackingConfig {
             gate_sigmas: 4.0,
             reset_after: 5,
             max_missed: 30,
-            max_gap_s: 1.0,
+            max_gap_s: 1.5,
         }
     }
 }
@@ -118,10 +125,16 @@ pub struct StreamPosition {
     pub intrinsics: Intrinsics,
 }
 
+/// The fastest frame rate a stream is taken to have: an index that grows
+/// by more than one frame plus this rate times the time since the last
+/// frame is another stream (or a broken counter), not dropped frames.
+pub const MAX_FRAME_RATE_HZ: f64 = 1000.0;
+
 impl StreamPosition {
     /// True when `next` is a later frame of the same stream: a larger
-    /// index, a capture time neither earlier nor more than `max_gap_s`
-    /// later, and the same image size and intrinsics (bit for bit).
+    /// index, by at most 1 + [`MAX_FRAME_RATE_HZ`] times the time between
+    /// them; a capture time neither earlier nor more than `max_gap_s`
+    /// later; the same image size and intrinsics (bit for bit).
     pub fn continues(&self, next: &StreamPosition, max_gap_s: f64) -> bool {
         let gap_s = next
             .stamp_ns
@@ -135,8 +148,12 @@ impl StreamPosition {
                 [k.fx, k.fy, k.cx, k.cy].map(f64::to_bits),
             )
         };
+        let plausible = |gap_s: f64| {
+            let step = (next.index - self.index) as f64;
+            step <= 1.0 + MAX_FRAME_RATE_HZ * gap_s
+        };
         next.index > self.index
-            && gap_s.is_some_and(|gap| gap <= max_gap_s)
+            && gap_s.is_some_and(|gap| gap <= max_gap_s && plausible(gap))
             && camera(self) == camera(next)
     }
 }
@@ -154,6 +171,7 @@ pub struct FrameSlope {
 #[derive(Debug, Clone, Copy)]
 struct Sample {
     slope_deg: f64,
+    /// The frame's own error, NaN when unknown.
     error_deg: f64,
 }
 
@@ -209,11 +227,7 @@ impl SlopeTracker {
         self.missed = 0;
         let sample = Sample {
             slope_deg: frame.slope_deg,
-            error_deg: if frame.error_deg.is_finite() {
-                frame.error_deg
-            } else {
-                0.0
-            },
+            error_deg: frame.error_deg,
         };
         let accepted = match self.median_and_sigma() {
             None => true,
@@ -277,9 +291,19 @@ impl SlopeTracker {
             .extend(self.window.iter().map(|s| (s.slope_deg - m).abs()));
         let mad = 1.4826 * median(&mut self.scratch);
         self.scratch.clear();
-        self.scratch.extend(self.window.iter().map(|s| s.error_deg));
+        let known = self.window.iter().map(|s| s.error_deg);
+        self.scratch.extend(known.filter(|e| e.is_finite()));
         let own = median(&mut self.scratch);
-        Some((m, mad.max(own)))
+        let sigma = if own.is_finite() {
+            mad.max(own)
+        } else if self.window.len() >= 3 && mad > 0.0 {
+            // No frame's own error is known (the baselines: one fit, no
+            // spread): the window's spread alone, once it says something.
+            mad
+        } else {
+            f64::NAN
+        };
+        Some((m, sigma))
     }
 
     fn tracked(&mut self, accepted: bool) -> TrackedSlope {
@@ -418,7 +442,7 @@ mod tests {
         assert!(!tr.accepted && tr.slope_deg == 16.0, "{tr:?}");
         // Dropped frames within the gap still continue the stream.
         next.index = 140;
-        next.stamp_ns = last.stamp_ns + 999_000_000;
+        next.stamp_ns = last.stamp_ns + 1_499_000_000;
         assert!(last.continues(&next, config.max_gap_s));
         let mut other_intrinsics = next;
         other_intrinsics.intrinsics.cx = 254.69;
@@ -428,11 +452,21 @@ mod tests {
             StreamPosition { index: 109, ..next },
             // ... the camera paused, or its clock went back ...
             StreamPosition {
-                stamp_ns: last.stamp_ns + 1_001_000_000,
+                stamp_ns: last.stamp_ns + 1_501_000_000,
                 ..next
             },
             StreamPosition {
                 stamp_ns: last.stamp_ns - 1,
+                ..next
+            },
+            // ... the index jumps further than 1 kHz allows ...
+            StreamPosition {
+                index: u64::MAX,
+                ..next
+            },
+            StreamPosition {
+                index: 109 + 1 + 1000 + 1,
+                stamp_ns: last.stamp_ns + 1_000_000_000,
                 ..next
             },
             // ... or another camera (size, intrinsics).
@@ -451,6 +485,28 @@ mod tests {
                 "{position:?}: {tr:?}"
             );
         }
+    }
+
+    /// Frames without an error of their own (the baselines) never give a
+    /// track of zero error: unknown (NaN) until 3 frames that differ, then
+    /// their spread (it was 0 from the first frame).
+    #[test]
+    fn frames_without_their_own_error_never_claim_zero() {
+        let config = TrackingConfig::default();
+        let mut t = SlopeTracker::new();
+        let fit = |slope_deg| FrameSlope {
+            error_deg: f64::NAN,
+            ..ok(slope_deg)
+        };
+        for slope in [16.0, 16.0, 16.0] {
+            let tr = t.update(&fit(slope), &config);
+            assert!(tr.accepted && tr.std_deg.is_nan(), "{tr:?}");
+        }
+        let tr = t.update(&fit(16.2), &config);
+        assert!(tr.std_deg.is_nan(), "MAD of 16, 16, 16, 16.2 is 0: {tr:?}");
+        t.update(&fit(15.8), &config);
+        let tr = t.update(&fit(16.1), &config);
+        assert!(tr.std_deg > 0.0 && tr.std_deg < 0.2, "{tr:?}");
     }
 
     #[test]

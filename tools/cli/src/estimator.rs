@@ -14,6 +14,7 @@ use clap::Parser;
 use slope_ipc_types::{
     CloudHeader, HealthComponent, ServiceNames, SlopeEstimate, SlopeMethod, SENSOR_NAME_LEN,
 };
+use slope_pipeline::tracking::StreamPosition;
 use slope_pipeline::{parse_method, CloudView, Estimator, EstimatorConfig, FrameInfo};
 use slope_sensor::ipc::{create_node, CloudSubscriber, EstimatePublisher, HealthPublisher};
 use slope_sensor::publish::StopFlag;
@@ -227,30 +228,29 @@ fn estimate(
     Ok(worker.stats.clone())
 }
 
-/// Frames the queue overwrote before we saw them, from the gap in the
-/// frame index since the last cloud (`last`: its index and capture time):
-/// only within one stream, whose index grows and whose capture time moves
-/// on by at most [`STREAM_GAP_NS`]. A stream that starts again (a replay
-/// looped or restarted, a new camera) or a recording that skips indices
-/// after a pause drops nothing.
-fn index_gap(last: Option<(u64, u64)>, header: &CloudHeader) -> u64 {
-    match last {
-        Some((index, stamp_ns))
-            if header.frame_index > index
-                && header
-                    .capture_stamp_ns
-                    .checked_sub(stamp_ns)
-                    .is_some_and(|dt| dt <= STREAM_GAP_NS) =>
-        {
-            header.frame_index - index - 1
-        }
-        _ => 0,
+/// Where a cloud sits in its stream (the tracker's view of it).
+fn stream_position(header: &CloudHeader) -> StreamPosition {
+    StreamPosition {
+        index: header.frame_index,
+        stamp_ns: header.capture_stamp_ns,
+        width: header.width as usize,
+        height: header.height as usize,
+        intrinsics: header.intrinsics,
     }
 }
 
-/// The longest pause between two clouds of one stream, as the tracker's
-/// default `tracking.max_gap_s`.
-const STREAM_GAP_NS: u64 = 1_000_000_000;
+/// Frames the queue overwrote before we saw them, from the gap in the
+/// frame index since the `last` cloud: only when `next` continues its
+/// stream as the tracker judges it ([`StreamPosition::continues`] with
+/// `tracking.max_gap_s`). A stream that starts again (a replay restarted,
+/// a new camera), a recording that skips indices after a pause, or an
+/// index that jumps further than the time allows drops nothing.
+fn index_gap(last: Option<StreamPosition>, next: &StreamPosition, max_gap_s: f64) -> u64 {
+    match last {
+        Some(last) if last.continues(next, max_gap_s) => next.index - last.index - 1,
+        _ => 0,
+    }
+}
 
 struct Worker<'a> {
     /// The estimator for the clouds of [`Worker::sensor`].
@@ -265,7 +265,7 @@ struct Worker<'a> {
     publisher: &'a EstimatePublisher,
     stats: EstimatorStats,
     /// Index and capture time of the last cloud.
-    last_frame: Option<(u64, u64)>,
+    last_frame: Option<StreamPosition>,
     /// The last `ok` slope, degrees.
     last_slope_deg: Option<f64>,
     max_frames: Option<u64>,
@@ -323,7 +323,8 @@ impl Worker<'_> {
         if header.sensor != self.sensor {
             self.use_sensor(&header);
         }
-        let gap = index_gap(self.last_frame, &header);
+        let position = stream_position(&header);
+        let gap = index_gap(self.last_frame, &position, self.config.tracking.max_gap_s);
         let missed = gap.max(skipped);
         if missed > 0 {
             tracing::debug!(frame = header.frame_index, missed, "dropped stale clouds");
@@ -331,7 +332,7 @@ impl Worker<'_> {
         self.stats.dropped = self.stats.dropped.saturating_add(missed);
         self.health.monitor.frames_in(missed.saturating_add(1));
         self.health.monitor.dropped(missed);
-        self.last_frame = Some((header.frame_index, header.capture_stamp_ns));
+        self.last_frame = Some(position);
         tracing::debug!(
             frame = header.frame_index,
             points = points.len(),
@@ -429,26 +430,33 @@ mod tests {
     }
 
     /// Drops are counted from index gaps within one stream only, and a
-    /// jump to the largest index does not overflow (it panicked the
-    /// estimator: "attempt to add with overflow").
+    /// jump to the largest index is no drop (it panicked the estimator:
+    /// "attempt to add with overflow", then counted 1.8e19 drops).
     #[test]
     fn index_gaps_count_as_drops_within_one_stream_only() {
-        let header = |index: u64, stamp_ms: u64| CloudHeader {
-            frame_index: index,
-            capture_stamp_ns: stamp_ms * 1_000_000,
-            ..CloudHeader::default()
+        let at = |index: u64, stamp_ms: u64| {
+            stream_position(&CloudHeader {
+                frame_index: index,
+                capture_stamp_ns: stamp_ms * 1_000_000,
+                ..CloudHeader::default()
+            })
         };
-        let last = Some((10, 1_000_000_000));
-        assert_eq!(index_gap(None, &header(10, 1000)), 0);
-        assert_eq!(index_gap(last, &header(11, 1033)), 0);
-        assert_eq!(index_gap(last, &header(14, 1133)), 3);
-        assert_eq!(index_gap(last, &header(14, 2000)), 3);
-        // A new stream: the index starts again, or comes after a pause, or
-        // the clock went back.
-        assert_eq!(index_gap(last, &header(0, 1033)), 0);
-        assert_eq!(index_gap(last, &header(10, 1033)), 0);
-        assert_eq!(index_gap(last, &header(50, 2001)), 0);
-        assert_eq!(index_gap(last, &header(50, 999)), 0);
-        assert_eq!(index_gap(last, &header(u64::MAX, 1033)), u64::MAX - 11);
+        let gap = |next| index_gap(Some(at(10, 1000)), &next, 1.5);
+        assert_eq!(index_gap(None, &at(10, 1000), 1.5), 0);
+        assert_eq!(gap(at(11, 1033)), 0);
+        assert_eq!(gap(at(14, 1133)), 3);
+        assert_eq!(gap(at(50, 2400)), 39);
+        // A new stream: the index starts again, comes after a pause, the
+        // clock went back, or the index jumps further than 1 kHz allows.
+        for next in [
+            at(0, 1033),
+            at(10, 1033),
+            at(50, 2501),
+            at(50, 999),
+            at(u64::MAX, 1033),
+            at(45, 1033),
+        ] {
+            assert_eq!(gap(next), 0, "{next:?}");
+        }
     }
 }

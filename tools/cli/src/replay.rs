@@ -37,7 +37,9 @@ pub struct ReplayArgs {
     #[arg(long, default_value_t = 1.0, value_parser = positive_f64, conflicts_with = "rate")]
     pub speed: f64,
 
-    /// Publish at a fixed rate instead of the recorded one, frames per second.
+    /// Publish at a fixed rate instead of the recorded one, frames per
+    /// second. Frames more than 1.5 s apart (`tracking.max_gap_s`), below
+    /// 0.67 here, each start a new tracked slope in the estimator.
     #[arg(long, value_parser = positive_f64)]
     pub rate: Option<f64>,
 
