@@ -46,7 +46,8 @@ pub fn bundled_recording() -> PathBuf {
 
 /// `--service-prefix` of the demo: it reads no config file.
 const DEMO_PREFIX_HELP: &str = "Prefix of the iceoryx2 service names the demo's processes \
-share; the demo adds -demo-<pid> to it, so that it never meets a running stack. Default: \"slope\"";
+share; the demo adds -demo-<pid> to it, so that it never meets a running stack. Default: the \
+environment variable SLOPE_SERVICE_PREFIX, else \"slope\"";
 
 #[derive(Debug, Parser)]
 #[command(
