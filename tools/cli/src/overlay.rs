@@ -39,6 +39,12 @@ const KEPT_DOTS: usize = 700;
 const DROPPED_DOTS: usize = 1200;
 const CAPTION_BG: [u8; 3] = [20, 20, 24];
 const CAPTION_FG: [u8; 3] = [240, 240, 240];
+/// A label's box stays this many depth pixels inside the image (where the
+/// image is large enough), so that it is read whole.
+pub const LABEL_EDGE: usize = 4;
+/// A label whose box lies at least this share on its plane fits: among
+/// the pixels where it fits, the one nearest the plane's centroid is taken.
+const LABEL_COVERAGE: f64 = 0.9;
 
 /// What a plane is in the picture.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -107,13 +113,25 @@ pub fn render_overlay(o: &Overlay<'_>) -> ColorImage {
             Role::Inclined => "inclined",
             Role::Other => continue,
         };
-        if let Some((u, v)) = centroid_pixel(inliers, w) {
-            let (x, y) = (u * SCALE as f32, v * SCALE as f32);
-            let x = x - text_width(name, TEXT_PX) / 2.0;
+        let margin = (TEXT_PX * 0.25).round();
+        let box_px = (
+            text_width(name, TEXT_PX) + 2.0 * margin,
+            TEXT_PX * 1.2 + 2.0 * margin,
+        );
+        // The label box in depth pixels, rounded up.
+        let box_depth = (
+            (box_px.0 / SCALE as f32).ceil() as usize,
+            (box_px.1 / SCALE as f32).ceil() as usize,
+        );
+        if let Some(place) = label_anchor(inliers, w, h, box_depth) {
+            // The text box centred in the depth-pixel box the anchor chose.
+            let (u0, v0) = place.top_left;
+            let x = u0 as f32 * SCALE as f32 + (box_depth.0 as f32 * SCALE as f32 - box_px.0) / 2.0;
+            let y = v0 as f32 * SCALE as f32 + (box_depth.1 as f32 * SCALE as f32 - box_px.1) / 2.0;
             draw_label(
                 &mut image,
-                x,
-                y,
+                x + margin,
+                y + margin,
                 TEXT_PX,
                 [255, 255, 255],
                 plane_colour(0, *role),
@@ -190,18 +208,88 @@ fn draw_normals(image: &mut ColorImage, normals: &[NormalDot], w: usize, h: usiz
     }
 }
 
-/// Mean column and row of `pixels` on a `w`-wide grid.
-fn centroid_pixel(pixels: &[u32], w: usize) -> Option<(f32, f32)> {
-    if pixels.is_empty() || w == 0 {
-        return None;
-    }
+/// Where a plane's label goes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LabelPlace {
+    /// The plane's pixel `(u, v)` the label is centred on.
+    pub pixel: (usize, usize),
+    /// The top-left pixel of the label's box (the box is moved inside the
+    /// image's border, so it may not be centred on `pixel` near an edge).
+    pub top_left: (usize, usize),
+}
+
+/// Where a plane's label goes: the pixel `(u, v)` of `pixels` (on a
+/// `w` x `h` grid) on which a label box of `label` (columns, rows) centred
+/// there covers the most of the plane, nearest the plane's centroid among
+/// those whose box lies at least 90 % on the plane. The box stays
+/// [`LABEL_EDGE`] pixels inside the image where the image is large enough.
+///
+/// The centroid alone is not enough: a segment that wraps around another
+/// plane (the floor around a stair) or comes in two pieces has its
+/// centroid on another plane, and the label landed there. `None` for a
+/// plane with no pixel inside the grid.
+pub fn label_anchor(
+    pixels: &[u32],
+    w: usize,
+    h: usize,
+    label: (usize, usize),
+) -> Option<LabelPlace> {
+    let mut mask = vec![false; w * h];
+    let mut count = 0usize;
     let (mut su, mut sv) = (0.0f64, 0.0f64);
     for &p in pixels {
-        su += (p as usize % w) as f64;
-        sv += (p as usize / w) as f64;
+        let p = p as usize;
+        if let Some(m) = mask.get_mut(p) {
+            if !*m {
+                *m = true;
+                count += 1;
+                su += (p % w) as f64;
+                sv += (p / w) as f64;
+            }
+        }
     }
-    let n = pixels.len() as f64;
-    Some(((su / n) as f32, (sv / n) as f32))
+    if count == 0 {
+        return None;
+    }
+    let centroid = (su / count as f64, sv / count as f64);
+    // Summed-area table: inside[(v * (w + 1)) + u] counts the plane's
+    // pixels above and left of (u, v).
+    let mut inside = vec![0u32; (w + 1) * (h + 1)];
+    for v in 0..h {
+        let mut row = 0u32;
+        for u in 0..w {
+            row += u32::from(mask[v * w + u]);
+            inside[(v + 1) * (w + 1) + u + 1] = inside[v * (w + 1) + u + 1] + row;
+        }
+    }
+    let (bw, bh) = (label.0.clamp(1, w), label.1.clamp(1, h));
+    let area = (bw * bh) as f64;
+    // How far the box's centre may go: LABEL_EDGE from the image edge
+    // where the image leaves room for it.
+    let edge_u = LABEL_EDGE.min((w - bw) / 2);
+    let edge_v = LABEL_EDGE.min((h - bh) / 2);
+    let mut best: Option<((f64, f64), LabelPlace)> = None;
+    for (p, _) in mask.iter().enumerate().filter(|(_, &m)| m) {
+        let (u, v) = (p % w, p / w);
+        // The box's top-left, moved inside the allowed band.
+        let u0 = (u.saturating_sub(bw / 2)).clamp(edge_u, w - bw - edge_u);
+        let v0 = (v.saturating_sub(bh / 2)).clamp(edge_v, h - bh - edge_v);
+        let (u1, v1) = (u0 + bw, v0 + bh);
+        let covered = inside[v1 * (w + 1) + u1] + inside[v0 * (w + 1) + u0]
+            - inside[v0 * (w + 1) + u1]
+            - inside[v1 * (w + 1) + u0];
+        let coverage = (f64::from(covered) / area).min(LABEL_COVERAGE);
+        let distance = (u as f64 - centroid.0).powi(2) + (v as f64 - centroid.1).powi(2);
+        let key = (coverage, -distance);
+        if best.is_none_or(|(b, _)| key > b) {
+            let place = LabelPlace {
+                pixel: (u, v),
+                top_left: (u0, v0),
+            };
+            best = Some((key, place));
+        }
+    }
+    best.map(|(_, place)| place)
 }
 
 fn mix(base: [u8; 3], colour: [u8; 3], weight: f32) -> [u8; 3] {
@@ -295,6 +383,66 @@ mod tests {
             .filter(|&(u, v)| image.get(u, v).is_some_and(|p| p[0] > 200 && p[1] > 200))
             .count();
         assert!(bright > 30, "{bright}");
+    }
+
+    /// The pixels of `(u, v)` in `rect` (columns `u0..u1`, rows `v0..v1`) on a
+    /// `w`-wide grid.
+    fn rect(w: u32, (u0, u1): (u32, u32), (v0, v1): (u32, u32)) -> Vec<u32> {
+        (v0..v1)
+            .flat_map(|v| (u0..u1).map(move |u| v * w + u))
+            .collect()
+    }
+
+    /// How many of the label box's pixels are in `plane`.
+    fn box_share(plane: &[u32], w: usize, place: LabelPlace, label: (usize, usize)) -> f64 {
+        let (u0, v0) = place.top_left;
+        let inside = (v0..v0 + label.1)
+            .flat_map(|v| (u0..u0 + label.0).map(move |u| (v * w + u) as u32))
+            .filter(|p| plane.contains(p))
+            .count();
+        inside as f64 / (label.0 * label.1) as f64
+    }
+
+    /// A floor that wraps around a stair (a U: two legs and a band along
+    /// the bottom) has its centroid on the stair, not on itself: the label
+    /// goes on one of its own pixels, its box on the floor and inside the
+    /// image (it was written at the centroid, on the stair).
+    #[test]
+    fn a_label_sits_on_its_own_plane_when_the_centroid_is_not() {
+        let (w, h) = (200usize, 150usize);
+        let mut floor = rect(200, (0, 40), (0, 150));
+        floor.extend(rect(200, (160, 200), (0, 150)));
+        floor.extend(rect(200, (40, 160), (120, 150)));
+        let label = (40, 14);
+        // The centroid (100, ~85) is on the stair between the legs.
+        let (cu, cv) = (100u32, 85u32);
+        assert!(!floor.contains(&(cv * 200 + cu)));
+        let place = label_anchor(&floor, w, h, label).expect("a place");
+        let (u, v) = place.pixel;
+        assert!(floor.contains(&((v * w + u) as u32)), "{place:?}");
+        assert!(box_share(&floor, w, place, label) >= 0.9, "{place:?}");
+        let (u0, v0) = place.top_left;
+        assert!(u0 >= LABEL_EDGE && v0 >= LABEL_EDGE, "{place:?}");
+        assert!(u0 + label.0 + LABEL_EDGE <= w && v0 + label.1 + LABEL_EDGE <= h);
+        // Two pieces, a thin one at the top and a thick one at the bottom,
+        // the centroid between them: the label goes on the one it fits in.
+        let mut pieces = rect(200, (0, 200), (0, 6));
+        pieces.extend(rect(200, (60, 140), (110, 150)));
+        let place = label_anchor(&pieces, w, h, label).expect("a place");
+        let (u, v) = place.pixel;
+        assert!(
+            (60..140).contains(&u) && (110..150).contains(&v),
+            "{place:?}"
+        );
+        assert!(box_share(&pieces, w, place, label) >= 0.9, "{place:?}");
+        // A plane the label cannot fit in still gets a pixel of its own.
+        let sliver = rect(200, (0, 200), (149, 150));
+        let place = label_anchor(&sliver, w, h, label).expect("a place");
+        assert_eq!(place.pixel.1, 149, "{place:?}");
+        assert!(place.top_left.1 + label.1 <= h, "{place:?}");
+        // Nothing on the grid: no place.
+        assert_eq!(label_anchor(&[1_000_000], w, h, label), None);
+        assert_eq!(label_anchor(&[], w, h, label), None);
     }
 
     #[test]

@@ -181,6 +181,60 @@ fn every_nth_frame_gets_an_overlay_and_a_ply_that_match_the_report() {
     assert!(blue > 200, "{blue} pixels of the paper method's colour");
 }
 
+/// The plot of every method on ramp16 (the reviewer's repro): each
+/// method's colour is seen in the slope chart (least-squares was hidden
+/// under tls) and in the legend column to its right, which is white but
+/// for the legend (no grid: the chart does not reach under it).
+#[test]
+fn the_plot_of_every_method_shows_each_beside_its_legend() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let recording = ramp16();
+    run(
+        EVAL,
+        &[
+            recording.to_str().expect("utf-8"),
+            "--method",
+            "all",
+            "--max-frames",
+            "10",
+            "--plot",
+            dir.path().to_str().expect("utf-8"),
+            "-q",
+        ],
+    );
+    let (w, h, rgb) = png_size(&dir.path().join("ramp16-plot.png"));
+    let (w, h) = (w as usize, h as usize);
+    let column = w - slope_tools::plot::LEGEND_WIDTH as usize;
+    let slope_panel = (h as f64 * 0.62) as usize;
+    let at = |x: usize, y: usize| {
+        [
+            rgb[3 * (y * w + x)],
+            rgb[3 * (y * w + x) + 1],
+            rgb[3 * (y * w + x) + 2],
+        ]
+    };
+    let count = |xs: std::ops::Range<usize>, colour: [u8; 3]| {
+        (0..slope_panel)
+            .flat_map(|y| xs.clone().map(move |x| (x, y)))
+            .filter(|&(x, y)| at(x, y) == colour)
+            .count()
+    };
+    for (name, colour) in [
+        ("paper", [30, 90, 200]),
+        ("least-squares", [220, 120, 20]),
+        ("tls", [40, 150, 60]),
+    ] {
+        let in_chart = count(0..column, colour);
+        let in_legend = count(column..w, colour);
+        assert!(in_chart > 10 * 15, "{name}: {in_chart} pixels in the chart");
+        assert!(in_legend > 40, "{name}: {in_legend} pixels in the legend");
+    }
+    // The legend column has no grid line: a row of it below the legend
+    // and its notes is white.
+    let last = slope_panel - 20;
+    assert!((column..w).all(|x| at(x, last) == [255, 255, 255]));
+}
+
 /// `slope-convert` and its status and stderr.
 fn convert(args: &[&str]) -> (Option<i32>, String) {
     let out = Command::new(CONVERT)
