@@ -1,0 +1,220 @@
+//! The two panels: the slopes over the frames, and the time per frame.
+
+use plotters::element::DashedPathElement;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+use super::*;
+
+/// Draws each of `elements` on `area` (pixel coordinates).
+pub(super) fn draw_each<DB: DrawingBackend, E>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    elements: impl Iterator<Item = E>,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>>
+where
+    E: plotters::element::Drawable<DB>,
+    for<'a> &'a E: plotters::element::PointCollection<'a, (i32, i32)>,
+{
+    for element in elements {
+        area.draw(&element)?;
+    }
+    Ok(())
+}
+
+/// Draws `points` as a line in `style` (dashed or not; the markers apart).
+pub(super) fn draw_line<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    points: Vec<(i32, i32)>,
+    style: SeriesStyle,
+) -> anyhow::Result<()> {
+    let stroke = style.colour.stroke_width(style.width);
+    if style.dashed {
+        area.draw(&DashedPathElement::new(points, DASH.0, DASH.1, stroke))
+    } else {
+        area.draw(&PathElement::new(points, stroke))
+    }
+    .map_err(plot_error)
+}
+
+pub(super) fn draw_slopes<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    reports: &[MethodReport],
+    with_legend: bool,
+) -> anyhow::Result<()> {
+    let (w, _) = area.dim_in_pixel();
+    let (area, legend_area) = area.split_horizontally(w.saturating_sub(LEGEND_WIDTH));
+    let series = slope_series(reports);
+    let truth = reports.iter().find_map(|r| r.truth_deg).map(|truth| {
+        let sign = reports
+            .iter()
+            .find_map(|r| r.summary.median_slope_deg)
+            .map_or(1.0, f64::signum);
+        (truth, sign * truth)
+    });
+    let slopes = series
+        .iter()
+        .flat_map(|s| s.points.iter().map(|p| p.1))
+        .chain(truth.map(|t| t.1));
+    let mut chart = ChartBuilder::on(&area)
+        .margin(12)
+        .x_label_area_size(36)
+        .y_label_area_size(56)
+        .build_cartesian_2d(frame_range(reports), value_range(slopes, None))
+        .map_err(plot_error)?;
+    chart
+        .configure_mesh()
+        .x_desc("frame")
+        .x_labels(frame_tick_count(&frame_range(reports)))
+        .x_label_formatter(&|x| frame_tick_label(*x))
+        .y_desc("slope (degrees)")
+        .label_style((FAMILY, 15))
+        .draw()
+        .map_err(plot_error)?;
+    let mut legend = Vec::new();
+    if let Some((truth, y)) = truth {
+        let style = SeriesStyle {
+            colour: TRUTH_GREY,
+            width: 3,
+            dashed: false,
+            marker: None,
+        };
+        let x = frame_range(reports);
+        chart
+            .draw_series(LineSeries::new(
+                [(x.start, y), (x.end, y)],
+                style.colour.stroke_width(style.width),
+            ))
+            .map_err(plot_error)?;
+        legend.push((format!("truth {truth:.1}°"), style));
+    }
+    // Lines first, then every marker, so that no line hides a marker.
+    for s in &series {
+        let stroke = s.style.colour.stroke_width(s.style.width);
+        if s.style.dashed {
+            chart
+                .draw_series(DashedLineSeries::new(
+                    s.points.iter().copied(),
+                    DASH.0,
+                    DASH.1,
+                    stroke,
+                ))
+                .map_err(plot_error)?;
+        } else {
+            chart
+                .draw_series(LineSeries::new(s.points.iter().copied(), stroke))
+                .map_err(plot_error)?;
+        }
+        legend.push((s.label.clone(), s.style));
+    }
+    for s in &series {
+        if let Some(marker) = s.style.marker {
+            draw_markers!(
+                ChartContext::draw_series,
+                &mut chart,
+                marker,
+                s.points.iter().copied(),
+                s.style.colour
+            )?;
+        }
+    }
+    if let Some(lines) = no_ok_note(reports) {
+        draw_centred_note(&chart.plotting_area().strip_coord_spec(), &lines)?;
+    }
+    if with_legend {
+        draw_legend(&legend_area, &legend, &coincidence_notes(&series))?;
+    }
+    Ok(())
+}
+
+/// `lines` in a framed box in the middle of `area`.
+pub(super) fn draw_centred_note<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    lines: &[String],
+) -> anyhow::Result<()> {
+    let font = TextStyle::from((FAMILY, 18).into_font());
+    let (w, h) = area.dim_in_pixel();
+    let row = 26i32;
+    let text_w = lines
+        .iter()
+        .map(|l| area.estimate_text_size(l, &font).map_or(0, |(w, _)| w))
+        .max()
+        .unwrap_or(0) as i32;
+    let box_h = row * lines.len() as i32 + 16;
+    let (cx, cy) = (w as i32 / 2, h as i32 / 2);
+    let (x0, y0) = (cx - text_w / 2 - 14, cy - box_h / 2);
+    let corners = [(x0, y0), (cx + text_w / 2 + 14, y0 + box_h)];
+    area.draw(&Rectangle::new(corners, WHITE.filled()))
+        .map_err(plot_error)?;
+    area.draw(&Rectangle::new(corners, BLACK.stroke_width(1)))
+        .map_err(plot_error)?;
+    let style = font.pos(Pos::new(HPos::Center, VPos::Center));
+    for (k, line) in lines.iter().enumerate() {
+        let y = y0 + 8 + row / 2 + row * k as i32;
+        area.draw(&Text::new(line.as_str(), (cx, y), style.clone()))
+            .map_err(plot_error)?;
+    }
+    Ok(())
+}
+
+pub(super) fn draw_times<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    reports: &[MethodReport],
+    with_legend: bool,
+) -> anyhow::Result<()> {
+    let (w, _) = area.dim_in_pixel();
+    let (area, legend_area) = area.split_horizontally(w.saturating_sub(LEGEND_WIDTH));
+    let times = reports.iter().flat_map(|r| {
+        r.estimates
+            .iter()
+            .filter_map(|f| Some(f.ms.as_ref()?.0.total_ms))
+    });
+    let mut chart = ChartBuilder::on(&area)
+        .margin(12)
+        .x_label_area_size(36)
+        .y_label_area_size(56)
+        .build_cartesian_2d(frame_range(reports), value_range(times, Some(0.0)))
+        .map_err(plot_error)?;
+    chart
+        .configure_mesh()
+        .x_desc("frame")
+        .x_labels(frame_tick_count(&frame_range(reports)))
+        .x_label_formatter(&|x| frame_tick_label(*x))
+        .y_desc("time per frame (ms)")
+        .label_style((FAMILY, 15))
+        .draw()
+        .map_err(plot_error)?;
+    let mut legend = Vec::new();
+    for report in reports {
+        let style = SeriesStyle {
+            colour: method_colour(report.method),
+            width: 2,
+            dashed: false,
+            marker: None,
+        };
+        let points: Vec<(f64, f64)> = report
+            .estimates
+            .iter()
+            .filter_map(|f| Some((f.index as f64, f.ms.as_ref()?.0.total_ms)))
+            .collect();
+        // A line needs two points: a single frame is drawn as a marker.
+        let markers = if points.len() == 1 { &points[..] } else { &[] };
+        chart
+            .draw_series(
+                markers
+                    .iter()
+                    .map(|&p| Circle::new(p, 4, style.colour.filled())),
+            )
+            .map_err(plot_error)?;
+        chart
+            .draw_series(LineSeries::new(
+                points,
+                style.colour.stroke_width(style.width),
+            ))
+            .map_err(plot_error)?;
+        legend.push((format!("{} time", report.method.name()), style));
+    }
+    if with_legend {
+        draw_legend(&legend_area, &legend, &[])?;
+    }
+    Ok(())
+}
