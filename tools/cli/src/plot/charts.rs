@@ -36,6 +36,39 @@ pub(super) fn draw_line<DB: DrawingBackend>(
     .map_err(plot_error)
 }
 
+/// A panel over the frames: frames along x (whole-frame ticks), `y` up
+/// (`y_desc`), its mesh drawn.
+fn frame_chart<'a, DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    reports: &[MethodReport],
+    y: std::ops::Range<f64>,
+    y_desc: &str,
+) -> anyhow::Result<
+    ChartContext<
+        'a,
+        DB,
+        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+    >,
+> {
+    let frames = frame_range(reports);
+    let mut chart = ChartBuilder::on(area)
+        .margin(12)
+        .x_label_area_size(36)
+        .y_label_area_size(56)
+        .build_cartesian_2d(frames.clone(), y)
+        .map_err(plot_error)?;
+    chart
+        .configure_mesh()
+        .x_desc("frame")
+        .x_labels(frame_tick_count(&frames))
+        .x_label_formatter(&|x| frame_tick_label(*x))
+        .y_desc(y_desc)
+        .label_style((FAMILY, 15))
+        .draw()
+        .map_err(plot_error)?;
+    Ok(chart)
+}
+
 pub(super) fn draw_slopes<DB: DrawingBackend>(
     area: &DrawingArea<DB, plotters::coord::Shift>,
     reports: &[MethodReport],
@@ -55,21 +88,7 @@ pub(super) fn draw_slopes<DB: DrawingBackend>(
         .iter()
         .flat_map(|s| s.points.iter().map(|p| p.1))
         .chain(truth.map(|t| t.1));
-    let mut chart = ChartBuilder::on(&area)
-        .margin(12)
-        .x_label_area_size(36)
-        .y_label_area_size(56)
-        .build_cartesian_2d(frame_range(reports), value_range(slopes, None))
-        .map_err(plot_error)?;
-    chart
-        .configure_mesh()
-        .x_desc("frame")
-        .x_labels(frame_tick_count(&frame_range(reports)))
-        .x_label_formatter(&|x| frame_tick_label(*x))
-        .y_desc("slope (degrees)")
-        .label_style((FAMILY, 15))
-        .draw()
-        .map_err(plot_error)?;
+    let mut chart = frame_chart(&area, reports, value_range(slopes, None), "slope (degrees)")?;
     let mut legend = Vec::new();
     if let Some((truth, y)) = truth {
         let style = SeriesStyle {
@@ -168,21 +187,12 @@ pub(super) fn draw_times<DB: DrawingBackend>(
             .iter()
             .filter_map(|f| Some(f.ms.as_ref()?.0.total_ms))
     });
-    let mut chart = ChartBuilder::on(&area)
-        .margin(12)
-        .x_label_area_size(36)
-        .y_label_area_size(56)
-        .build_cartesian_2d(frame_range(reports), value_range(times, Some(0.0)))
-        .map_err(plot_error)?;
-    chart
-        .configure_mesh()
-        .x_desc("frame")
-        .x_labels(frame_tick_count(&frame_range(reports)))
-        .x_label_formatter(&|x| frame_tick_label(*x))
-        .y_desc("time per frame (ms)")
-        .label_style((FAMILY, 15))
-        .draw()
-        .map_err(plot_error)?;
+    let mut chart = frame_chart(
+        &area,
+        reports,
+        value_range(times, Some(0.0)),
+        "time per frame (ms)",
+    )?;
     let mut legend = Vec::new();
     for report in reports {
         let style = SeriesStyle {
