@@ -181,13 +181,7 @@ impl Estimator {
             error_deg: estimate.slope_std_deg / samples.sqrt(),
             confidence: estimate.confidence,
         };
-        let position = StreamPosition {
-            index: frame.index,
-            stamp_ns: frame.stamp_ns,
-            width: cloud.width,
-            height: cloud.height,
-            intrinsics: cloud.intrinsics,
-        };
+        let position = StreamPosition::of(cloud, frame.index, frame.stamp_ns);
         let tracked = self
             .tracker
             .update_at(position, &slope, &self.config.tracking);

@@ -41,10 +41,9 @@
 use std::collections::VecDeque;
 
 use serde::{Deserialize, Serialize};
-use slope_ipc_types::EstimateStatus;
+use slope_ipc_types::{EstimateStatus, Intrinsics};
 
-use slope_ipc_types::Intrinsics;
-
+use crate::cloud::CloudView;
 use crate::validate::{at_least, fraction, non_negative, positive, InvalidValue};
 
 /// The tracked slope after a frame.
@@ -131,6 +130,18 @@ pub struct StreamPosition {
 pub const MAX_FRAME_RATE_HZ: f64 = 1000.0;
 
 impl StreamPosition {
+    /// The position of frame `index`, captured at `stamp_ns`, of `cloud`'s
+    /// camera.
+    pub fn of(cloud: &CloudView<'_>, index: u64, stamp_ns: u64) -> Self {
+        Self {
+            index,
+            stamp_ns,
+            width: cloud.width,
+            height: cloud.height,
+            intrinsics: cloud.intrinsics,
+        }
+    }
+
     /// True when `next` is a later frame of the same stream: a larger
     /// index, by at most 1 + [`MAX_FRAME_RATE_HZ`] times the time between
     /// them; a capture time neither earlier nor more than `max_gap_s`
@@ -213,7 +224,7 @@ impl SlopeTracker {
     }
 
     /// Feeds the next frame of the stream; returns the track after it.
-    pub fn update(&mut self, frame: &FrameSlope, config: &TrackingConfig) -> TrackedSlope {
+    fn update(&mut self, frame: &FrameSlope, config: &TrackingConfig) -> TrackedSlope {
         let usable = frame.status == EstimateStatus::Ok
             && frame.slope_deg.is_finite()
             && frame.confidence >= config.min_confidence;

@@ -228,17 +228,6 @@ fn estimate(
     Ok(worker.stats.clone())
 }
 
-/// Where a cloud sits in its stream (the tracker's view of it).
-fn stream_position(header: &CloudHeader) -> StreamPosition {
-    StreamPosition {
-        index: header.frame_index,
-        stamp_ns: header.capture_stamp_ns,
-        width: header.width as usize,
-        height: header.height as usize,
-        intrinsics: header.intrinsics,
-    }
-}
-
 /// Frames the queue overwrote before we saw them, from the gap in the
 /// frame index since the `last` cloud: only when `next` continues its
 /// stream as the tracker judges it ([`StreamPosition::continues`] with
@@ -323,7 +312,8 @@ impl Worker<'_> {
         if header.sensor != self.sensor {
             self.use_sensor(&header);
         }
-        let position = stream_position(&header);
+        let view = CloudView::from_header(&header, points);
+        let position = StreamPosition::of(&view, header.frame_index, header.capture_stamp_ns);
         let gap = index_gap(self.last_frame, &position, self.config.tracking.max_gap_s);
         let missed = gap.max(skipped);
         if missed > 0 {
@@ -339,7 +329,6 @@ impl Worker<'_> {
             payload_addr = format_args!("{:#x}", points.as_ptr() as usize),
             "processing cloud in place"
         );
-        let view = CloudView::from_header(&header, points);
         // The frame index seeds this frame's random draws; the tracker
         // follows the slope over the stream.
         let frame = FrameInfo {
@@ -434,13 +423,9 @@ mod tests {
     /// "attempt to add with overflow", then counted 1.8e19 drops).
     #[test]
     fn index_gaps_count_as_drops_within_one_stream_only() {
-        let at = |index: u64, stamp_ms: u64| {
-            stream_position(&CloudHeader {
-                frame_index: index,
-                capture_stamp_ns: stamp_ms * 1_000_000,
-                ..CloudHeader::default()
-            })
-        };
+        let camera = CloudView::from_header(&CloudHeader::default(), &[]);
+        let at =
+            |index: u64, stamp_ms: u64| StreamPosition::of(&camera, index, stamp_ms * 1_000_000);
         let gap = |next| index_gap(Some(at(10, 1000)), &next, 1.5);
         assert_eq!(index_gap(None, &at(10, 1000), 1.5), 0);
         assert_eq!(gap(at(11, 1033)), 0);
