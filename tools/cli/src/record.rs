@@ -376,13 +376,7 @@ pub fn prepare_out_dir(dir: &Path) -> anyhow::Result<bool> {
             Ok(false)
         }
         Err(err) if err.kind() == std::io::ErrorKind::NotFound => {
-            let parent = dir.parent().filter(|p| !p.as_os_str().is_empty());
-            if parent.is_some_and(|p| !p.is_dir()) {
-                anyhow::bail!(
-                    "cannot create the output directory {}: its directory does not exist",
-                    dir.display()
-                );
-            }
+            check_parent(dir, "the output directory ")?;
             std::fs::create_dir(dir)
                 .with_context(|| format!("cannot create the output directory {}", dir.display()))?;
             Ok(true)
@@ -755,13 +749,7 @@ fn record_mcap(
             out.display()
         );
     }
-    let parent = out.parent().filter(|p| !p.as_os_str().is_empty());
-    if parent.is_some_and(|p| !p.is_dir()) {
-        anyhow::bail!(
-            "cannot create {}: its directory does not exist",
-            out.display()
-        );
-    }
+    check_parent(out, "")?;
     let stats = record_topic(args, limits, stop)?;
     tracing::info!(
         written = stats.written,
@@ -772,6 +760,19 @@ fn record_mcap(
         "recording finished"
     );
     Ok(stats)
+}
+
+/// Refuses an output (`what` names it in the message) whose directory does
+/// not exist: a typing error in a parent is said, not created.
+fn check_parent(path: &Path, what: &str) -> anyhow::Result<()> {
+    let parent = path.parent().filter(|p| !p.as_os_str().is_empty());
+    if parent.is_some_and(|p| !p.is_dir()) {
+        anyhow::bail!(
+            "cannot create {what}{}: its directory does not exist",
+            path.display()
+        );
+    }
+    Ok(())
 }
 
 /// A failed recording's error, saying what is left in `out`: the frames
