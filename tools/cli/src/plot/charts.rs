@@ -74,8 +74,7 @@ pub(super) fn draw_slopes<DB: DrawingBackend>(
     reports: &[MethodReport],
     with_legend: bool,
 ) -> anyhow::Result<()> {
-    let (w, _) = area.dim_in_pixel();
-    let (area, legend_area) = area.split_horizontally(w.saturating_sub(LEGEND_WIDTH));
+    let (area, legend_area) = split_legend(area);
     let series = slope_series(reports);
     let truth = reports.iter().find_map(|r| r.truth_deg).map(|truth| {
         let sign = reports
@@ -180,8 +179,7 @@ pub(super) fn draw_times<DB: DrawingBackend>(
     reports: &[MethodReport],
     with_legend: bool,
 ) -> anyhow::Result<()> {
-    let (w, _) = area.dim_in_pixel();
-    let (area, legend_area) = area.split_horizontally(w.saturating_sub(LEGEND_WIDTH));
+    let (area, legend_area) = split_legend(area);
     let times = reports.iter().flat_map(|r| {
         r.estimates
             .iter()

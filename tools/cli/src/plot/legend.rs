@@ -16,6 +16,18 @@ pub(super) const LEGEND_FONT: u32 = 15;
 /// the plotting area, so that it hides no data).
 pub const LEGEND_WIDTH: u32 = 240;
 
+/// A panel's area split into its chart (left) and its legend column
+/// ([`LEGEND_WIDTH`], right).
+pub(super) fn split_legend<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+) -> (
+    DrawingArea<DB, plotters::coord::Shift>,
+    DrawingArea<DB, plotters::coord::Shift>,
+) {
+    let (w, _) = area.dim_in_pixel();
+    area.split_horizontally(w.saturating_sub(LEGEND_WIDTH))
+}
+
 /// The legend in its own column: per entry a sample drawn like its line
 /// (same width, dash and marker) and its label; then `notes`, wrapped.
 pub(super) fn draw_legend<DB: DrawingBackend>(
