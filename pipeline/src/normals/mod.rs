@@ -67,7 +67,8 @@
 //! which is why the measured patch radius replaced it.
 //!
 //! One concern per file: `window_table.rs` (the summed-area tables and the
-//! window search), `support.rs` (the support's bounds and centre, walked
+//! window search), `window_cache.rs` (one eigenvector per distinct
+//! window), `support.rs` (the support's bounds and centre, walked
 //! once, by the pass-through when it runs first), `tree.rs` (the k-d tree
 //! fallback), `eigen.rs` (the windows' eigenvector solver), `ray_noise.rs`
 //! (the optional noise correction), `grid.rs` (the coarse normals that gate
@@ -78,6 +79,7 @@ use nalgebra::Vector3;
 use crate::cloud::{is_measured, CloudView};
 use crate::plane_fit::smallest_eigenvector_3x3;
 use eigen::smallest_eigenvector_sym3;
+use window_cache::{WindowKey, WindowNormals};
 
 mod config;
 mod eigen;
@@ -85,6 +87,7 @@ mod grid;
 mod ray_noise;
 mod support;
 mod tree;
+mod window_cache;
 mod window_table;
 
 pub use config::NormalsConfig;
@@ -140,8 +143,12 @@ pub struct NormalEstimator {
     normals: Vec<Vector3<f64>>,
     radius: Vec<u16>,
     fallback: Vec<usize>,
-    /// Window moment sums per member (count 0: no window).
+    /// Window moment sums per member (count 0: no window), and the table
+    /// cells the window covers.
     sums: Vec<[f64; CHANNELS]>,
+    window: Vec<WindowKey>,
+    /// The normal of each distinct window (`window_cache.rs`).
+    window_normals: WindowNormals,
 }
 
 /// Pixel bounding box `[u0, u1) x [v0, v1)`.
@@ -287,11 +294,14 @@ impl NormalEstimator {
         self.radius.resize(members, u16::MAX);
         self.sums.clear();
         self.sums.resize(members, [0.0; CHANNELS]);
+        self.window.clear();
+        self.window.resize(members, WindowKey::default());
+        self.window_normals.clear();
     }
 
     /// The oriented normal of each member with a window, from its sums
-    /// (coordinates relative to `centre`); a degenerate window counts as
-    /// undefined.
+    /// (coordinates relative to `centre`), solved once per distinct window;
+    /// a degenerate window counts as undefined.
     fn window_normals(
         &mut self,
         cloud: &CloudView<'_>,
@@ -311,7 +321,10 @@ impl NormalEstimator {
                 continue;
             };
             let solve = smallest_eigenvector_sym3;
-            if let Some(n) = normal_from_sums_by(m, centre, noise_scale, focal, solve) {
+            let normal = self.window_normals.get_or_solve(self.window[slot], || {
+                normal_from_sums_by(m, centre, noise_scale, focal, solve)
+            });
+            if let Some(n) = normal {
                 self.normals[slot] = orient(n, &p, viewpoint);
             } else {
                 stats.undefined += 1;

@@ -292,3 +292,46 @@ fn orientation_faces_the_viewpoint() {
     assert_eq!(orient(Vector3::z(), &p, &Vector3::zeros()), -Vector3::z());
     assert_eq!(orient(-Vector3::z(), &p, &Vector3::zeros()), -Vector3::z());
 }
+
+#[test]
+fn shared_windows_give_each_member_its_own_normal() {
+    // A dense noisy ramp (every pixel a member) and a narrow strip (whose
+    // windows all reach its top and bottom): many members share a window.
+    // Each normal must equal the one a fresh estimator gives that member
+    // alone, bit for bit (no window seen before it).
+    let scene = Scene::ramp(30.0);
+    let cloud = SceneCloud::render(&scene, 128, 106, 0.0015, 4);
+    let view = cloud.view();
+    let all = all_measured(&cloud);
+    let strip: Vec<u32> = all
+        .iter()
+        .copied()
+        .filter(|&i| (40..52).contains(&(i / 128)))
+        .collect();
+    let config = NormalsConfig {
+        interior_only: false,
+        ..NormalsConfig::default()
+    };
+    for support in [&all, &strip] {
+        let mut shared = NormalEstimator::new();
+        let (normals, _) = shared.estimate(&view, support, &config, &Vector3::zeros());
+        let normals = normals.to_vec();
+        let mut alone = NormalEstimator::new();
+        let mut compared = 0;
+        for (slot, &pixel) in support.iter().enumerate().step_by(7) {
+            let (single, _) =
+                alone.estimate_with_support(&view, &[pixel], support, &config, &Vector3::zeros());
+            let (a, b) = (normals[slot], single[0]);
+            assert!(
+                a == b || (a.x.is_nan() && b.x.is_nan()),
+                "pixel {pixel}: {a:?} shared, {b:?} alone"
+            );
+            compared += usize::from(a.x.is_finite());
+        }
+        assert!(
+            compared > support.len() / 8,
+            "{compared} of {}",
+            support.len()
+        );
+    }
+}

@@ -3,6 +3,7 @@
 
 use nalgebra::Vector3;
 
+use super::window_cache::WindowKey;
 use super::{
     moments, Bounds, NormalEstimator, NormalStats, NormalsConfig, CHANNELS, TABLE_CELL_PX,
 };
@@ -54,11 +55,12 @@ impl NormalEstimator {
                 r0
             };
             match smallest_window(&self.table, cells, (u, v), r_start..=r_max, k) {
-                Some((m, r)) => {
+                Some((m, r, window)) => {
                     stats.from_window += 1;
                     // 0: the first window sufficed (an interior point).
                     self.radius[slot] = (r - r_start) as u16;
                     self.sums[slot] = m;
+                    self.window[slot] = window;
                 }
                 None => self.fallback.push(slot),
             }
@@ -174,9 +176,9 @@ fn start_radius(k: usize) -> usize {
 
 /// The moment sums of the smallest window around table pixel `(u, v)`,
 /// its radius tried from `radii` in turn, that holds at least `k` points,
-/// and that radius; `None` when none does (or the window covers the whole
-/// table of `cells` = (columns, rows) before). A window holds the table
-/// cells its pixels touch.
+/// that radius and the window's [`WindowKey`]; `None` when none does (or
+/// the window covers the whole table of `cells` = (columns, rows) before).
+/// A window holds the table cells its pixels touch.
 #[inline]
 fn smallest_window(
     table: &[[f64; CHANNELS]],
@@ -184,7 +186,7 @@ fn smallest_window(
     (u, v): (usize, usize),
     radii: std::ops::RangeInclusive<usize>,
     k: usize,
-) -> Option<([f64; CHANNELS], usize)> {
+) -> Option<([f64; CHANNELS], usize, WindowKey)> {
     let g = TABLE_CELL_PX;
     let tw = bw + 1;
     for r in radii {
@@ -201,7 +203,7 @@ fn smallest_window(
             for (c, mc) in m.iter_mut().enumerate() {
                 *mc = s(c);
             }
-            return Some((m, r));
+            return Some((m, r, WindowKey::new(a0, a1, b0, b1)));
         }
         if a0 == 0 && b0 == 0 && a1 == bw && b1 == bh {
             break;
