@@ -196,41 +196,77 @@ pub(crate) fn parse_frames(input: &[u8], path: &Path) -> Result<Vec<FrameEntry>,
         let row = error.position().map_or(0, |p| lines.line_at(p.byte()));
         csv_to_recording_error(error, row, path)
     };
-
     let header = reader
         .headers()
         .map_err(|e| csv_error(e, &mut lines))?
         .clone();
-    let column = |name: &str| header.iter().position(|h| h == name);
-    let required = |name: &'static str| {
-        column(name).ok_or(RecordingError::MissingColumn {
-            path: path.to_path_buf(),
-            column: name,
-        })
-    };
-    let index_col = required("index")?;
-    let timestamp_col = required("timestamp_ns")?;
-    let depth_col = required("depth")?;
-    let color_col = column("color");
-    let slope_col = column("slope_deg");
-
+    let columns = Columns::find(&header, path)?;
     let mut frames: Vec<FrameEntry> = Vec::new();
     for record in reader.records() {
         let record = record.map_err(|e| csv_error(e, &mut lines))?;
         let row = record.position().map_or(0, |p| lines.line_at(p.byte()));
+        let frame = columns.frame(&record, row, path)?;
+        if let Some(previous) = frames.last() {
+            check_order(previous, &frame, path)?;
+        }
+        frames.push(frame);
+    }
+    Ok(frames)
+}
+
+/// Where `frames.csv`'s columns are: the three required ones and the two
+/// optional ones.
+struct Columns {
+    count: usize,
+    index: usize,
+    timestamp_ns: usize,
+    depth: usize,
+    color: Option<usize>,
+    slope_deg: Option<usize>,
+}
+
+impl Columns {
+    /// The columns of `header`; a required one missing is an error.
+    fn find(header: &csv::StringRecord, path: &Path) -> Result<Self, RecordingError> {
+        let column = |name: &str| header.iter().position(|h| h == name);
+        let required = |name: &'static str| {
+            column(name).ok_or(RecordingError::MissingColumn {
+                path: path.to_path_buf(),
+                column: name,
+            })
+        };
+        Ok(Self {
+            count: header.len(),
+            index: required("index")?,
+            timestamp_ns: required("timestamp_ns")?,
+            depth: required("depth")?,
+            color: column("color"),
+            slope_deg: column("slope_deg"),
+        })
+    }
+
+    /// The frame of one data row (`row`: its line in the file).
+    fn frame(
+        &self,
+        record: &csv::StringRecord,
+        row: usize,
+        path: &Path,
+    ) -> Result<FrameEntry, RecordingError> {
         let bad_row = |reason: String| RecordingError::BadRow {
             path: path.to_path_buf(),
             row,
             reason,
         };
-        if record.len() != header.len() {
+        if record.len() != self.count {
             return Err(bad_row(format!(
                 "{} fields, the header has {}",
                 record.len(),
-                header.len()
+                self.count
             )));
         }
         let field = |col: usize| record.get(col).unwrap_or("");
+        // An optional column's value, `None` when absent or empty.
+        let given = |col: Option<usize>| col.map(field).filter(|text| !text.is_empty());
         let integer = |name: &str, col: usize| {
             let text = field(col);
             text.parse::<u64>().map_err(|_| {
@@ -239,60 +275,55 @@ pub(crate) fn parse_frames(input: &[u8], path: &Path) -> Result<Vec<FrameEntry>,
                 ))
             })
         };
-        let image_path = |name: &str, col: usize| {
-            let text = field(col);
+        let image_path = |name: &str, text: &str| {
             relative_path(text)
                 .map_err(|reason| bad_row(format!("column `{name}`: path {text:?} {reason}")))
         };
-
-        let index = integer("index", index_col)?;
-        let timestamp_ns = integer("timestamp_ns", timestamp_col)?;
-        let depth = image_path("depth", depth_col)?;
-        let color = match color_col {
-            Some(col) if !field(col).is_empty() => Some(image_path("color", col)?),
-            _ => None,
+        let slope_deg = |text: &str| {
+            let value = text
+                .parse::<f64>()
+                .map_err(|_| bad_row(format!("column `slope_deg`: {text:?} is not a number")))?;
+            check_truth_deg(value)
+                .map_err(|reason| bad_row(format!("column `slope_deg`: {reason}")))?;
+            Ok(value)
         };
-        let slope_deg = match slope_col {
-            Some(col) if !field(col).is_empty() => {
-                let text = field(col);
-                let value = text.parse::<f64>().map_err(|_| {
-                    bad_row(format!("column `slope_deg`: {text:?} is not a number"))
-                })?;
-                check_truth_deg(value)
-                    .map_err(|reason| bad_row(format!("column `slope_deg`: {reason}")))?;
-                Some(value)
-            }
-            _ => None,
-        };
-
-        if let Some(previous) = frames.last() {
-            if index <= previous.index {
-                return Err(RecordingError::NonIncreasingIndex {
-                    path: path.to_path_buf(),
-                    row,
-                    index,
-                    previous: previous.index,
-                });
-            }
-            if timestamp_ns < previous.timestamp_ns {
-                return Err(RecordingError::DecreasingTimestamp {
-                    path: path.to_path_buf(),
-                    row,
-                    timestamp_ns,
-                    previous: previous.timestamp_ns,
-                });
-            }
-        }
-        frames.push(FrameEntry {
-            index,
-            timestamp_ns,
-            depth,
-            color,
-            slope_deg,
+        Ok(FrameEntry {
+            index: integer("index", self.index)?,
+            timestamp_ns: integer("timestamp_ns", self.timestamp_ns)?,
+            depth: image_path("depth", field(self.depth))?,
+            color: given(self.color)
+                .map(|text| image_path("color", text))
+                .transpose()?,
+            slope_deg: given(self.slope_deg).map(slope_deg).transpose()?,
             row,
+        })
+    }
+}
+
+/// Indices must grow and timestamps must not go back from `previous` to
+/// `frame`.
+fn check_order(
+    previous: &FrameEntry,
+    frame: &FrameEntry,
+    path: &Path,
+) -> Result<(), RecordingError> {
+    if frame.index <= previous.index {
+        return Err(RecordingError::NonIncreasingIndex {
+            path: path.to_path_buf(),
+            row: frame.row,
+            index: frame.index,
+            previous: previous.index,
         });
     }
-    Ok(frames)
+    if frame.timestamp_ns < previous.timestamp_ns {
+        return Err(RecordingError::DecreasingTimestamp {
+            path: path.to_path_buf(),
+            row: frame.row,
+            timestamp_ns: frame.timestamp_ns,
+            previous: previous.timestamp_ns,
+        });
+    }
+    Ok(())
 }
 
 fn csv_to_recording_error(error: csv::Error, row: usize, path: &Path) -> RecordingError {

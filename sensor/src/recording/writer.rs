@@ -171,6 +171,37 @@ impl RecordingWriter {
         let depth_rel = format!("{DEPTH_DIR}/{name}");
         let color_rel = format!("{COLOR_DIR}/{name}");
 
+        self.check_frame(row, timestamp_ns, slope_deg)?;
+        self.check_size(row, &depth_rel, depth.width, depth.height, depth.data.len())?;
+        if let Some(color) = color {
+            self.check_size(row, &color_rel, color.width, color.height, color.data.len())?;
+        }
+
+        self.samples.clear();
+        self.samples
+            .extend(depth.data.iter().flat_map(|count| count.to_be_bytes()));
+        self.encode(&depth_rel, ColorType::Grayscale, BitDepth::Sixteen)?;
+        if let Some(color) = color {
+            self.create_color_dir()?;
+            self.samples.clear();
+            self.samples.extend(color.data.iter().flatten());
+            self.encode(&color_rel, ColorType::Rgb, BitDepth::Eight)?;
+        }
+        let color_rel = color.map(|_| color_rel.as_str());
+        self.append_row(index, timestamp_ns, &depth_rel, color_rel, slope_deg)?;
+        self.next_index += 1;
+        self.last_timestamp_ns = Some(timestamp_ns);
+        Ok(index)
+    }
+
+    /// Refuses a frame whose timestamp is earlier than the last one's, or
+    /// whose `slope_deg` is given without a truth column or out of range.
+    fn check_frame(
+        &self,
+        row: usize,
+        timestamp_ns: u64,
+        slope_deg: Option<f64>,
+    ) -> Result<(), RecordingError> {
         if let Some(previous) = self.last_timestamp_ns.filter(|&p| timestamp_ns < p) {
             return Err(RecordingError::DecreasingTimestamp {
                 path: self.frames_path.clone(),
@@ -192,41 +223,39 @@ impl RecordingWriter {
                 reason: format!("column `slope_deg`: {reason}"),
             })?;
         }
-        self.check_size(row, &depth_rel, depth.width, depth.height, depth.data.len())?;
-        if let Some(color) = color {
-            self.check_size(row, &color_rel, color.width, color.height, color.data.len())?;
-        }
+        Ok(())
+    }
 
-        self.samples.clear();
-        self.samples
-            .extend(depth.data.iter().flat_map(|count| count.to_be_bytes()));
-        self.encode(&depth_rel, ColorType::Grayscale, BitDepth::Sixteen)?;
-        if let Some(color) = color {
-            if !self.color_dir_created {
-                let color_dir = self.dir.join(COLOR_DIR);
-                fs::create_dir_all(&color_dir).map_err(|source| RecordingError::Write {
-                    path: color_dir,
-                    source,
-                })?;
-                self.color_dir_created = true;
-            }
-            self.samples.clear();
-            self.samples.extend(color.data.iter().flatten());
-            self.encode(&color_rel, ColorType::Rgb, BitDepth::Eight)?;
+    /// Creates `color/` before the first colour image.
+    fn create_color_dir(&mut self) -> Result<(), RecordingError> {
+        if !self.color_dir_created {
+            let color_dir = self.dir.join(COLOR_DIR);
+            fs::create_dir_all(&color_dir).map_err(|source| RecordingError::Write {
+                path: color_dir,
+                source,
+            })?;
+            self.color_dir_created = true;
         }
+        Ok(())
+    }
 
+    /// Appends the frame's row to `frames.csv` and flushes it.
+    fn append_row(
+        &mut self,
+        index: u64,
+        timestamp_ns: u64,
+        depth_rel: &str,
+        color_rel: Option<&str>,
+        slope_deg: Option<f64>,
+    ) -> Result<(), RecordingError> {
         let index_text = index.to_string();
         let timestamp_text = timestamp_ns.to_string();
         let slope_text = slope_deg.map(|s| s.to_string()).unwrap_or_default();
         let mut record = vec![
             index_text.as_str(),
             timestamp_text.as_str(),
-            depth_rel.as_str(),
-            if color.is_some() {
-                color_rel.as_str()
-            } else {
-                ""
-            },
+            depth_rel,
+            color_rel.unwrap_or(""),
         ];
         if self.per_frame_truth {
             record.push(slope_text.as_str());
@@ -237,11 +266,7 @@ impl RecordingWriter {
         self.csv.flush().map_err(|source| RecordingError::Write {
             path: self.frames_path.clone(),
             source,
-        })?;
-
-        self.next_index += 1;
-        self.last_timestamp_ns = Some(timestamp_ns);
-        Ok(index)
+        })
     }
 
     /// Flushes `frames.csv` and returns the recording directory.
