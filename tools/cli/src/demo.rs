@@ -231,6 +231,37 @@ fn line_for(estimate: &SlopeEstimate, truth: Option<f64>) -> String {
 }
 
 pub fn run(args: &DemoArgs, stop: &StopFlag) -> anyhow::Result<DemoSummary> {
+    let prefix = demo_prefix(args)?;
+    let recording = DemoRecording::open(args.recording_dir())?;
+    let names = ServiceNames::new(prefix.clone());
+    let node = create_node(&node_name("slope-demo"))?;
+    let subscriber = EstimateSubscriber::create(&node, &names)?;
+    println!(
+        "slope-demo: {} ({} frames) -> slope-replay -> slope-estimator --method {} -> here",
+        recording.dir.display(),
+        recording.frames,
+        args.method.name()
+    );
+    let mut chain = Chain::spawn(args, &prefix, &recording.dir)?;
+    let tally = watch(args, stop, &subscriber, &recording, &mut chain)?;
+    chain.replay.terminate(Duration::from_secs(2))?;
+    let status = chain.estimator.terminate(Duration::from_secs(3))?;
+    if !status.success() && !stop.is_stopped() {
+        bail!("slope-estimator did not exit cleanly ({status})");
+    }
+    let estimates = tally.estimates;
+    let summary = tally.summary(&recording);
+    print_summary(&summary);
+    // Stopped before the first estimate (still waiting for the chain) is a
+    // clean stop, not a failure.
+    if estimates == 0 && !stop.is_stopped() {
+        bail!("the estimator published no estimate");
+    }
+    Ok(summary)
+}
+
+/// The demo's service prefix: the given one with `-demo-<pid>`.
+fn demo_prefix(args: &DemoArgs) -> anyhow::Result<String> {
     let prefix = format!(
         "{}-demo-{}",
         args.common.prefix_or(DEFAULT_SERVICE_PREFIX),
@@ -241,87 +272,151 @@ pub fn run(args: &DemoArgs, stop: &StopFlag) -> anyhow::Result<DemoSummary> {
     if let Err(reason) = prefix_arg(&prefix) {
         bail!("--service-prefix with the demo's -demo-<pid> added: {reason}");
     }
-    let recording_dir = args.recording_dir();
-    let recording = Recording::open(&recording_dir)
-        .with_context(|| format!("cannot open the demo recording {}", recording_dir.display()))?;
-    let truths: HashMap<u64, Option<f64>> = recording
-        .frames()
-        .iter()
-        .map(|f| (f.index, recording.truth_deg(f)))
-        .collect();
-    let frame_count = recording.frames().len();
-    let last_index = recording.frames().last().map(|f| f.index);
-    let estimator_bin = binary_path("slope-estimator")?;
-    let replay_bin = binary_path("slope-replay")?;
+    Ok(prefix)
+}
 
-    let names = ServiceNames::new(prefix.clone());
-    let node = create_node(&node_name("slope-demo"))?;
-    let subscriber = EstimateSubscriber::create(&node, &names)?;
-    let child_log = if args.common.log.verbose > 0 {
-        "-v"
-    } else {
-        "-q"
-    };
+/// What the demo knows of its recording: where it is, its frames and
+/// their ground truth.
+struct DemoRecording {
+    dir: PathBuf,
+    truths: HashMap<u64, Option<f64>>,
+    frames: usize,
+    last_index: Option<u64>,
+    truth_deg: Option<f64>,
+}
 
-    println!(
-        "slope-demo: {} ({frame_count} frames) -> slope-replay -> slope-estimator --method {} -> here",
-        recording_dir.display(),
-        args.method.name()
-    );
-    let mut estimator = ChildGuard::spawn(
-        "slope-estimator",
-        Command::new(&estimator_bin)
-            .args(["--method", args.method.name(), "--service-prefix", &prefix])
-            .arg(child_log),
-    )?;
-    let mut replay_cmd = Command::new(&replay_bin);
-    replay_cmd
-        .arg(&recording_dir)
-        .args(["--service-prefix", &prefix, "--wait-subscribers", "1"])
-        .args(["--wait-timeout-s", "30"])
-        .arg(child_log);
-    if let Some(rate) = args.rate {
-        replay_cmd.args(["--rate", &rate.to_string()]);
+impl DemoRecording {
+    fn open(dir: PathBuf) -> anyhow::Result<Self> {
+        let recording = Recording::open(&dir)
+            .with_context(|| format!("cannot open the demo recording {}", dir.display()))?;
+        let frames = recording.frames();
+        Ok(Self {
+            truths: frames
+                .iter()
+                .map(|f| (f.index, recording.truth_deg(f)))
+                .collect(),
+            frames: frames.len(),
+            last_index: frames.last().map(|f| f.index),
+            truth_deg: recording.meta().truth.slope_deg,
+            dir,
+        })
     }
-    let mut replay = ChildGuard::spawn("slope-replay", &mut replay_cmd)?;
+}
 
+/// The estimator and the replay, as child processes.
+struct Chain {
+    estimator: ChildGuard,
+    replay: ChildGuard,
+}
+
+impl Chain {
+    fn spawn(args: &DemoArgs, prefix: &str, recording_dir: &Path) -> anyhow::Result<Self> {
+        let estimator_bin = binary_path("slope-estimator")?;
+        let replay_bin = binary_path("slope-replay")?;
+        let child_log = if args.common.log.verbose > 0 {
+            "-v"
+        } else {
+            "-q"
+        };
+        let estimator = ChildGuard::spawn(
+            "slope-estimator",
+            Command::new(&estimator_bin)
+                .args(["--method", args.method.name(), "--service-prefix", prefix])
+                .arg(child_log),
+        )?;
+        let mut replay_cmd = Command::new(&replay_bin);
+        replay_cmd
+            .arg(recording_dir)
+            .args(["--service-prefix", prefix, "--wait-subscribers", "1"])
+            .args(["--wait-timeout-s", "30"])
+            .arg(child_log);
+        if let Some(rate) = args.rate {
+            replay_cmd.args(["--rate", &rate.to_string()]);
+        }
+        let replay = ChildGuard::spawn("slope-replay", &mut replay_cmd)?;
+        Ok(Self { estimator, replay })
+    }
+}
+
+/// The estimates received so far.
+#[derive(Default)]
+struct Tally {
+    estimates: usize,
+    dropped: u64,
+    slopes: Vec<f64>,
+    latencies: Vec<f64>,
+    errors: Vec<f64>,
+}
+
+impl Tally {
+    /// Prints `estimate` beside its frame's truth and counts it.
+    fn add(&mut self, estimate: &SlopeEstimate, recording: &DemoRecording) {
+        self.estimates += 1;
+        self.dropped = estimate.dropped_frames;
+        let truth = recording
+            .truths
+            .get(&estimate.frame_index)
+            .copied()
+            .flatten();
+        println!("{}", line_for(estimate, truth));
+        self.latencies.push(estimate.latency_ms());
+        if estimate.status() == EstimateStatus::Ok {
+            self.slopes.push(estimate.slope_deg);
+            if let Some(t) = truth {
+                self.errors.push((estimate.slope_deg.abs() - t).abs());
+            }
+        }
+    }
+
+    fn summary(mut self, recording: &DemoRecording) -> DemoSummary {
+        let median_slope_deg = median(&mut self.slopes);
+        DemoSummary {
+            recording_frames: recording.frames,
+            estimates: self.estimates,
+            ok: self.slopes.len(),
+            median_slope_deg,
+            truth_deg: recording.truth_deg,
+            abs_error_deg: match (median_slope_deg, recording.truth_deg) {
+                (Some(m), Some(t)) => Some((m.abs() - t).abs()),
+                _ => median(&mut self.errors),
+            },
+            median_latency_ms: median(&mut self.latencies),
+            dropped: self.dropped,
+        }
+    }
+}
+
+/// Receives and prints estimates until the recording's last frame's
+/// arrives, the chain goes quiet after the replay ended, or `stop`; fails
+/// when a child fails or nothing arrives for `--stall-timeout`.
+fn watch(
+    args: &DemoArgs,
+    stop: &StopFlag,
+    subscriber: &EstimateSubscriber,
+    recording: &DemoRecording,
+    chain: &mut Chain,
+) -> anyhow::Result<Tally> {
     let stall = Duration::from_secs_f64(args.stall_timeout);
     let mut last_activity = Instant::now();
     let mut replay_done: Option<Instant> = None;
-    let mut slopes = Vec::new();
-    let mut latencies = Vec::new();
-    let mut errors = Vec::new();
-    let mut estimates = 0usize;
-    let mut dropped = 0u64;
+    let mut tally = Tally::default();
     let mut finished = false;
     while !finished && !stop.is_stopped() {
         subscriber.listener().wait(Duration::from_millis(100))?;
         while let Some(estimate) = subscriber.receive()? {
             last_activity = Instant::now();
-            estimates += 1;
-            dropped = estimate.dropped_frames;
-            let truth = truths.get(&estimate.frame_index).copied().flatten();
-            println!("{}", line_for(&estimate, truth));
-            latencies.push(estimate.latency_ms());
-            if estimate.status() == EstimateStatus::Ok {
-                slopes.push(estimate.slope_deg);
-                if let Some(t) = truth {
-                    errors.push((estimate.slope_deg.abs() - t).abs());
-                }
-            }
-            if Some(estimate.frame_index) == last_index {
-                finished = true;
-            }
+            tally.add(&estimate, recording);
+            finished |= Some(estimate.frame_index) == recording.last_index;
         }
         if replay_done.is_none() {
-            if let Some(status) = replay.try_wait()? {
+            if let Some(status) = chain.replay.try_wait()? {
                 if !status.success() {
                     bail!("slope-replay failed ({status})");
                 }
                 replay_done = Some(Instant::now());
             }
         }
-        if let Some(status) = estimator.try_wait()? {
+        if let Some(status) = chain.estimator.try_wait()? {
             bail!("slope-estimator exited early ({status})");
         }
         // After the replay ends, the last frame may have been superseded;
@@ -338,35 +433,7 @@ pub fn run(args: &DemoArgs, stop: &StopFlag) -> anyhow::Result<DemoSummary> {
             );
         }
     }
-    replay.terminate(Duration::from_secs(2))?;
-    let status = estimator.terminate(Duration::from_secs(3))?;
-    if !status.success() && !stop.is_stopped() {
-        bail!("slope-estimator did not exit cleanly ({status})");
-    }
-
-    let ok = slopes.len();
-    let truth_deg = recording.meta().truth.slope_deg;
-    let median_slope_deg = median(&mut slopes);
-    let summary = DemoSummary {
-        recording_frames: frame_count,
-        estimates,
-        ok,
-        median_slope_deg,
-        truth_deg,
-        abs_error_deg: match (median_slope_deg, truth_deg) {
-            (Some(m), Some(t)) => Some((m.abs() - t).abs()),
-            _ => median(&mut errors),
-        },
-        median_latency_ms: median(&mut latencies),
-        dropped,
-    };
-    print_summary(&summary);
-    // Stopped before the first estimate (still waiting for the chain) is a
-    // clean stop, not a failure.
-    if estimates == 0 && !stop.is_stopped() {
-        bail!("the estimator published no estimate");
-    }
-    Ok(summary)
+    Ok(tally)
 }
 
 fn print_summary(s: &DemoSummary) {
