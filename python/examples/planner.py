@@ -4,8 +4,11 @@
     python3 python/examples/planner.py --service-prefix slope
     python3 python/examples/planner.py --json --count 10   # one JSON object per estimate
 
-The speed rule is an example, not advice: full speed on flat ground, slower
-on steeper ramps, stop above --max-slope or when the estimate is not trusted.
+The speed rule is an example, not advice: slower on steeper ramps, stop above
+--max-slope or when the estimate is not trusted, and --no-ramp-speed when no
+ramp is seen (`no_inclined_plane`): the camera sees no surface where the floor
+drops away, so a step or slope down beyond the floor's edge reads the same as
+a flat floor; only other sensors (cliff sensors, a map) allow full speed there.
 The slope is the tracked one while this frame agrees with the track; when it
 does not (the track is about to follow a new surface, or this frame is an
 outlier), the steeper of the two.
@@ -19,10 +22,12 @@ import sys
 import slope_client
 
 
-def speed_for(estimate, max_slope_deg: float, min_confidence: float) -> float:
+def speed_for(
+    estimate, max_slope_deg: float, min_confidence: float, no_ramp_speed: float
+) -> float:
     """Fraction of full speed for this estimate."""
     if estimate.status_name == "no_inclined_plane":
-        return 1.0  # flat floor ahead
+        return no_ramp_speed  # no ramp seen: a flat floor, or a drop-off the camera cannot see
     if not estimate.ok or estimate.confidence < min_confidence:
         return 0.0  # not sure: stop
     slope = estimate.slope_deg
@@ -37,21 +42,68 @@ def speed_for(estimate, max_slope_deg: float, min_confidence: float) -> float:
     return 1.0 - abs(slope) / max_slope_deg
 
 
+def positive_int(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{value} is not at least 1")
+    return value
+
+
+def positive_float(text: str) -> float:
+    value = float(text)
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"{text} is not a number above 0")
+    return value
+
+
+def fraction(text: str) -> float:
+    value = float(text)
+    if not 0 <= value <= 1:
+        raise argparse.ArgumentTypeError(f"{text} is not in [0, 1]")
+    return value
+
+
+def service_prefix(text: str) -> str:
+    """The rules of the Rust programs' --service-prefix."""
+    if not text:
+        raise argparse.ArgumentTypeError(
+            "the service prefix is empty (check SLOPE_SERVICE_PREFIX); the default is 'slope'"
+        )
+    if text.startswith("/") or text.endswith("/") or any(ord(c) < 32 for c in text):
+        raise argparse.ArgumentTypeError(
+            f"'{text}' is not a usable service prefix: no leading or trailing '/', "
+            "no control characters"
+        )
+    return text
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    default_prefix = os.environ.get("SLOPE_SERVICE_PREFIX") or slope_client.DEFAULT_PREFIX
+    default_prefix = os.environ.get("SLOPE_SERVICE_PREFIX", slope_client.DEFAULT_PREFIX)
     parser.add_argument(
         "--service-prefix",
         "--prefix",
         dest="prefix",
+        type=service_prefix,
         default=default_prefix,
         help="service prefix of the slope processes (default: $SLOPE_SERVICE_PREFIX, else slope)",
     )
-    parser.add_argument("--count", type=int, help="stop after this many estimates")
-    parser.add_argument("--timeout-s", type=float, help="stop after this many seconds without one")
+    parser.add_argument("--count", type=positive_int, help="stop after this many estimates")
+    parser.add_argument(
+        "--timeout-s", type=positive_float, help="stop after this many seconds without one"
+    )
     parser.add_argument("--json", action="store_true", help="one JSON object per estimate")
-    parser.add_argument("--max-slope", type=float, default=20.0, help="degrees (default 20)")
-    parser.add_argument("--min-confidence", type=float, default=0.5)
+    parser.add_argument(
+        "--max-slope", type=positive_float, default=20.0, help="degrees (default 20)"
+    )
+    parser.add_argument("--min-confidence", type=fraction, default=0.5, help="(default 0.5)")
+    parser.add_argument(
+        "--no-ramp-speed",
+        type=fraction,
+        default=0.5,
+        help="fraction of full speed when no ramp is seen (default 0.5): a drop-off the camera "
+        "cannot see looks the same",
+    )
     args = parser.parse_args()
 
     seen = 0
@@ -59,7 +111,7 @@ def main() -> int:
         estimates = slope_client.subscribe(args.prefix, timeout_s=args.timeout_s)
         print(f"subscribed to {estimates.name}", file=sys.stderr, flush=True)
         for estimate in estimates:
-            speed = speed_for(estimate, args.max_slope, args.min_confidence)
+            speed = speed_for(estimate, args.max_slope, args.min_confidence, args.no_ramp_speed)
             if args.json:
                 record = estimate.to_dict()
                 record["speed"] = speed
@@ -74,7 +126,7 @@ def main() -> int:
             seen += 1
             if args.count is not None and seen >= args.count:
                 break
-    except slope_client.ServiceNotFound as err:
+    except slope_client.SlopeClientError as err:
         print(f"error: {err}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:

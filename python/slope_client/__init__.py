@@ -35,7 +35,9 @@ __all__ = [
     "StageHealth",
     "TimingStats",
     "ServiceNotFound",
+    "SlopeClientError",
     "Subscription",
+    "TooManySubscribers",
     "layout",
     "subscribe",
     "subscribe_health",
@@ -44,8 +46,16 @@ __all__ = [
 DEFAULT_PREFIX = "slope"
 
 
-class ServiceNotFound(RuntimeError):
+class SlopeClientError(RuntimeError):
+    """A subscription could not be made; the message says why and what to do."""
+
+
+class ServiceNotFound(SlopeClientError):
     """The topic does not exist (yet): no estimator runs with that prefix."""
+
+
+class TooManySubscribers(SlopeClientError):
+    """The topic has as many subscribers as it takes."""
 
 
 def subscribe(
@@ -104,7 +114,18 @@ class Subscription:
                 time.sleep(0.1)
         # The listener exists before the subscriber: no notification is missed.
         self._listener = event.listener_builder().create()
-        self._subscriber = pubsub.subscriber_builder().create()
+        try:
+            self._subscriber = pubsub.subscriber_builder().create()
+        except iox2.SubscriberCreateError as err:
+            if "ExceedsMaxSupportedSubscribers" not in str(err):
+                raise
+            limit = pubsub.static_config.max_subscribers
+            raise TooManySubscribers(
+                f"cannot subscribe to '{name}': the topic takes at most {limit} subscribers at "
+                "once and has that many: stop one (a slope-echo or slope-record left running?) "
+                "or wait until one ends"
+            ) from None
+        self._wait_error = iox2.ListenerWaitError
         self._wake = iox2.Duration.from_millis(max(int(wake_s * 1000), 1))
 
     def receive(self):
@@ -127,4 +148,11 @@ class Subscription:
                 continue
             if self._timeout_s is not None and time.monotonic() - last >= self._timeout_s:
                 return
-            self._listener.timed_wait(self._wake)
+            try:
+                self._listener.timed_wait(self._wake)
+            except self._wait_error as err:
+                # iceoryx2 ends the wait on SIGINT with its own error; the
+                # caller expects Python's.
+                if "InterruptSignal" in str(err):
+                    raise KeyboardInterrupt from None
+                raise

@@ -8,11 +8,15 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::time::Duration;
+
+use nix::sys::signal::Signal;
 
 use serde_json::Value;
 use slope_integration_tests::{deadline, replay_frames, repo_root, unique_prefix, Proc};
 use slope_ipc_types::layout::{self, FieldLayout};
 use slope_ipc_types::{confidence, EstimateStatus, SlopeMethod};
+use slope_sensor::ipc::ESTIMATE_MAX_SUBSCRIBERS;
 
 const REQUIRE_PYTHON_ENV: &str = "SLOPE_REQUIRE_PYTHON";
 
@@ -167,17 +171,26 @@ fn venv_with_client() -> Result<PathBuf, String> {
     Ok(bin)
 }
 
+/// The venv's interpreter, or `None` (the test skips) when the client
+/// cannot be installed and Python is not required.
+fn client_python() -> Option<PathBuf> {
+    match venv_with_client() {
+        Ok(bin) => Some(bin),
+        Err(why) => {
+            assert!(
+                python_optional(),
+                "the Python client cannot be installed: {why}"
+            );
+            eprintln!("SKIPPED: the Python client cannot be installed here ({why})");
+            None
+        }
+    }
+}
+
 #[test]
 fn a_python_planner_receives_real_estimates() {
-    let bin = match venv_with_client() {
-        Ok(bin) => bin,
-        Err(why) => {
-            let required =
-                std::env::var_os(REQUIRE_PYTHON_ENV).is_some() || std::env::var_os("CI").is_some();
-            assert!(!required, "the Python client cannot be installed: {why}");
-            eprintln!("SKIPPED: the Python client cannot be installed here ({why})");
-            return;
-        }
+    let Some(bin) = client_python() else {
+        return;
     };
     let prefix = unique_prefix("python");
     let _estimator = Proc::spawn("slope-estimator", ["--service-prefix", &prefix])
@@ -214,6 +227,108 @@ fn a_python_planner_receives_real_estimates() {
         frames.push(e["frame"].as_u64().expect("frame"));
     }
     assert_eq!(frames, [0, 1, 2, 3, 4, 5], "{}", planner.diagnostics());
-    planner.assert_exits_zero_within(std::time::Duration::from_secs(10));
-    replay.assert_exits_zero_within(std::time::Duration::from_secs(30));
+    planner.assert_exits_zero_within(Duration::from_secs(10));
+    replay.assert_exits_zero_within(Duration::from_secs(30));
+}
+
+/// Runs the rest of its arguments with SIGINT at its default, as a shell in
+/// a terminal starts a program (a test harness may have it ignored, and
+/// Python then never raises `KeyboardInterrupt`).
+const SIGINT_DEFAULT: &str = "import os, signal, sys; signal.signal(signal.SIGINT, \
+signal.SIG_DFL); os.execv(sys.argv[1], sys.argv[1:])";
+
+#[test]
+fn ctrl_c_ends_a_python_planner_cleanly() {
+    let Some(bin) = client_python() else {
+        return;
+    };
+    let prefix = unique_prefix("python-sigint");
+    let _estimator = Proc::spawn("slope-estimator", ["--service-prefix", &prefix])
+        .assert_ready("estimator ready");
+    let planner_script = repo_root().join("python/examples/planner.py");
+    let bin_text = bin.to_str().expect("utf-8 path");
+    let mut planner = Proc::spawn_path(
+        &bin,
+        [
+            "-c",
+            SIGINT_DEFAULT,
+            bin_text,
+            planner_script.to_str().expect("utf-8 path"),
+            "--service-prefix",
+            &prefix,
+        ],
+    )
+    .assert_ready(&format!("subscribed to {prefix}/estimate"));
+    // Waiting on the topic's event when the signal comes: iceoryx2's wait
+    // ends with its own error, which must not escape as a traceback.
+    planner.signal(Signal::SIGINT);
+    planner.assert_exits_zero_within(Duration::from_secs(10));
+    let stderr = planner.stderr_lines().join("\n");
+    assert!(!stderr.contains("Error"), "{stderr}");
+}
+
+#[test]
+fn a_subscriber_beyond_the_topics_limit_is_told_why() {
+    let Some(bin) = client_python() else {
+        return;
+    };
+    let prefix = unique_prefix("python-limit");
+    let _estimator = Proc::spawn("slope-estimator", ["--service-prefix", &prefix])
+        .assert_ready("estimator ready");
+    let code = format!(
+        "import slope_client\n\
+         subs = []\n\
+         try:\n\
+         \x20   for _ in range(100):\n\
+         \x20       subs.append(slope_client.subscribe({prefix:?}))\n\
+         except slope_client.TooManySubscribers as err:\n\
+         \x20   print(len(subs), err)\n"
+    );
+    let out = Command::new(&bin)
+        .args(["-c", &code])
+        .output()
+        .unwrap_or_else(|e| panic!("cannot run {}: {e}", bin.display()));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let limit = ESTIMATE_MAX_SUBSCRIBERS;
+    assert!(
+        stdout.starts_with(&format!(
+            "{limit} cannot subscribe to '{prefix}/estimate': the topic takes at most {limit} \
+             subscribers at once"
+        )),
+        "{stdout}"
+    );
+}
+
+#[test]
+fn the_example_planner_slows_down_where_it_cannot_see_the_floor_ahead() {
+    if !python_runs() {
+        return;
+    }
+    // `speed_for` alone, on stand-ins for estimates: no ramp seen is
+    // --no-ramp-speed (a drop-off the camera cannot see reads the same),
+    // never full speed; an untrusted estimate stops; a trusted 10° ramp is
+    // half speed at --max-slope 20.
+    let planner = repo_root().join("python/examples/planner.py");
+    let code = format!(
+        "import importlib.util, types\n\
+         spec = importlib.util.spec_from_file_location('planner', {planner:?})\n\
+         planner = importlib.util.module_from_spec(spec)\n\
+         spec.loader.exec_module(planner)\n\
+         def estimate(status, ok, confidence, slope):\n\
+         \x20   return types.SimpleNamespace(status_name=status, ok=ok, confidence=confidence,\n\
+         \x20       slope_deg=slope, tracked_slope_deg=slope, tracked_accepted=True)\n\
+         print(planner.speed_for(estimate('no_inclined_plane', False, 0.0, float('nan')), 20, 0.5, 0.4))\n\
+         print(planner.speed_for(estimate('ok', True, 0.3, 10.0), 20, 0.5, 0.4))\n\
+         print(planner.speed_for(estimate('ok', True, 0.9, 10.0), 20, 0.5, 0.4))\n"
+    );
+    let out = run_python(&code);
+    assert_eq!(
+        out.split_whitespace().collect::<Vec<_>>(),
+        ["0.4", "0.0", "0.5"]
+    );
 }
