@@ -451,3 +451,83 @@ fn a_converted_recording_has_one_message_per_frame_and_topic() {
         );
     }
 }
+
+/// A message read back: its topic, log time and payload.
+type Message = (String, u64, Vec<u8>);
+
+/// Every message of `path`, in file order, and the compression of each
+/// chunk (from the summary's chunk indexes).
+fn messages_and_chunks(path: &Path) -> (Vec<Message>, Vec<String>) {
+    let bytes = std::fs::read(path).expect("mcap file");
+    let messages = mcap::MessageStream::new(&bytes)
+        .expect("an MCAP file")
+        .map(|message| {
+            let message = message.expect("a message");
+            let topic = message.channel.topic.clone();
+            (topic, message.log_time, message.data.into_owned())
+        })
+        .collect();
+    let summary = mcap::Summary::read(&bytes)
+        .expect("a summary")
+        .expect("a finished file");
+    let chunks = summary
+        .chunk_indexes
+        .iter()
+        .map(|chunk| chunk.compression.clone())
+        .collect();
+    (messages, chunks)
+}
+
+/// Compressed chunks (zstd, the default, and lz4) read back with the `mcap`
+/// crate's reader as the uncompressed file: the same messages, byte for
+/// byte, in a smaller file.
+#[test]
+fn compressed_mcap_files_hold_the_same_messages() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let recording = ramp16();
+    let convert_to = |name: &str, compression: Option<&str>| {
+        let out = dir.path().join(name);
+        let mut args = vec![
+            recording.to_str().expect("utf-8"),
+            "-o",
+            out.to_str().expect("utf-8"),
+            "--max-frames",
+            "3",
+            "--no-estimates",
+            "-q",
+        ];
+        if let Some(compression) = compression {
+            args.extend(["--mcap-compression", compression]);
+        }
+        run(CONVERT, &args);
+        let size = std::fs::metadata(&out).expect("output").len();
+        let (messages, chunks) = messages_and_chunks(&out);
+        (size, messages, chunks)
+    };
+    let (plain_size, plain, chunks) = convert_to("none.mcap", Some("none"));
+    assert!(chunks.iter().all(String::is_empty), "{chunks:?}");
+    assert_eq!(plain.len(), 6, "a depth image and a cloud per frame");
+    for (name, compression, expected) in [
+        ("default.mcap", None, "zstd"),
+        ("lz4.mcap", Some("lz4"), "lz4"),
+    ] {
+        let (size, messages, chunks) = convert_to(name, compression);
+        assert!(
+            !chunks.is_empty() && chunks.iter().all(|c| c == expected),
+            "{name}: {chunks:?}"
+        );
+        assert!(
+            size * 10 < plain_size * 7,
+            "{name}: {size} of {plain_size} bytes"
+        );
+        assert_eq!(messages.len(), plain.len(), "{name}");
+        for (message, original) in messages.iter().zip(&plain) {
+            assert_eq!((&message.0, message.1), (&original.0, original.1), "{name}");
+            assert!(
+                message.2 == original.2,
+                "{name}: a payload of {} differs",
+                message.0
+            );
+        }
+    }
+}
