@@ -146,7 +146,7 @@ pub fn run(args: &ConvertArgs, stop: &StopFlag) -> anyhow::Result<ConvertStats> 
     let projector = recording.projector();
     let mut depth = DepthImage::default();
     let mut points = vec![CloudPoint::INVALID; projector.len()];
-    let mut exporter = McapExporter::create_replacing(args.output(), args.mcap_compression)?;
+    let mut exporter = McapExporter::create_replacing(args.output(), args.mcap_compression, meta)?;
     let limit = args.max_frames.map_or(usize::MAX, |m| m as usize);
     let total = recording.frames().len().min(limit);
     let mut stats = ConvertStats::default();

@@ -459,9 +459,11 @@ impl Sink {
                 recording.set_compression(args.compression.into());
                 Sink::Recording(Box::new(recording))
             }
-            RecordFormat::Mcap => {
-                Sink::Mcap(Box::new(McapExporter::create(out, args.mcap_compression)?))
-            }
+            RecordFormat::Mcap => Sink::Mcap(Box::new(McapExporter::create(
+                out,
+                args.mcap_compression,
+                &meta_for(info),
+            )?)),
         })
     }
 
@@ -1039,6 +1041,55 @@ mod tests {
         drop(writer);
         let message = format!("{:#}", explain_failure(failure(), tmp.path(), false));
         assert_eq!(message, "cannot write frame 0: No space left on device");
+    }
+
+    /// `--format mcap` stores the sensor of the clouds (the header's) and
+    /// their intrinsics as the file's `slope.recording` metadata.
+    #[test]
+    fn an_mcap_recording_names_its_sensor() {
+        let tmp = tempfile::tempdir().expect("tempdir");
+        let out = tmp.path().join("run.mcap");
+        let args =
+            RecordArgs::try_parse_checked_from(["slope-record", out.to_str().expect("utf-8")])
+                .expect("args");
+        let info = SourceInfo {
+            width: 4,
+            height: 3,
+            intrinsics: Intrinsics {
+                fx: 365.25,
+                fy: 366.0,
+                cx: 1.5,
+                cy: 1.0,
+            },
+            unit_m: TOPIC_DEPTH_UNIT_M,
+            mount: Mount::UNKNOWN,
+            source: CloudSource::Camera,
+            has_color: false,
+            sensor: "kinect1".into(),
+        };
+        Sink::create(&args, &info)
+            .expect("sink")
+            .finish(&out)
+            .expect("finish");
+        let bytes = std::fs::read(&out).expect("the MCAP file");
+        let summary = mcap::Summary::read(&bytes)
+            .expect("summary")
+            .expect("a finished file");
+        let [index] = &summary.metadata_indexes[..] else {
+            panic!("one metadata record: {:?}", summary.metadata_indexes);
+        };
+        let metadata = mcap::read::metadata(&bytes, index).expect("metadata");
+        assert_eq!(metadata.name, "slope.recording");
+        let value = |key: &str| metadata.metadata.get(key).map(String::as_str);
+        assert_eq!(value("sensor"), Some("kinect1"));
+        assert_eq!((value("width"), value("height")), (Some("4"), Some("3")));
+        assert_eq!((value("fx"), value("fy")), (Some("365.25"), Some("366")));
+        assert_eq!((value("cx"), value("cy")), (Some("1.5"), Some("1")));
+        assert_eq!(
+            value("mount_pitch_deg"),
+            None,
+            "an unknown mount is left out"
+        );
     }
 
     #[test]

@@ -531,3 +531,58 @@ fn compressed_mcap_files_hold_the_same_messages() {
         }
     }
 }
+
+/// The `slope.recording` metadata records of the MCAP file at `path`.
+fn recording_metadata(path: &Path) -> Vec<BTreeMap<String, String>> {
+    let bytes = std::fs::read(path).expect("mcap file");
+    let summary = mcap::Summary::read(&bytes)
+        .expect("a summary")
+        .expect("a finished file");
+    summary
+        .metadata_indexes
+        .iter()
+        .map(|index| mcap::read::metadata(&bytes, index).expect("a metadata record"))
+        .filter(|metadata| metadata.name == "slope.recording")
+        .map(|metadata| metadata.metadata)
+        .collect()
+}
+
+/// The converted file names the recording's sensor, and gives its depth
+/// image's size, intrinsics and mount, as recording.toml has them.
+#[test]
+fn a_converted_recording_names_its_sensor() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("ramp16.mcap");
+    let recording = ramp16();
+    run(
+        CONVERT,
+        &[
+            recording.to_str().expect("utf-8"),
+            "-o",
+            out.to_str().expect("utf-8"),
+            "--max-frames",
+            "1",
+            "--no-estimates",
+            "-q",
+        ],
+    );
+    let records = recording_metadata(&out);
+    assert_eq!(records.len(), 1, "{records:?}");
+    let expected = [
+        ("sensor", "synthetic"),
+        ("width", "512"),
+        ("height", "424"),
+        ("fx", "365"),
+        ("fy", "365"),
+        ("cx", "255.5"),
+        ("cy", "211.5"),
+        ("mount_height_m", "0.5"),
+        ("mount_pitch_deg", "-20"),
+        ("mount_roll_deg", "0"),
+    ];
+    let expected: BTreeMap<String, String> = expected
+        .iter()
+        .map(|(k, v)| (k.to_string(), v.to_string()))
+        .collect();
+    assert_eq!(records[0], expected);
+}
