@@ -451,3 +451,138 @@ fn a_converted_recording_has_one_message_per_frame_and_topic() {
         );
     }
 }
+
+/// A message read back: its topic, log time and payload.
+type Message = (String, u64, Vec<u8>);
+
+/// Every message of `path`, in file order, and the compression of each
+/// chunk (from the summary's chunk indexes).
+fn messages_and_chunks(path: &Path) -> (Vec<Message>, Vec<String>) {
+    let bytes = std::fs::read(path).expect("mcap file");
+    let messages = mcap::MessageStream::new(&bytes)
+        .expect("an MCAP file")
+        .map(|message| {
+            let message = message.expect("a message");
+            let topic = message.channel.topic.clone();
+            (topic, message.log_time, message.data.into_owned())
+        })
+        .collect();
+    let summary = mcap::Summary::read(&bytes)
+        .expect("a summary")
+        .expect("a finished file");
+    let chunks = summary
+        .chunk_indexes
+        .iter()
+        .map(|chunk| chunk.compression.clone())
+        .collect();
+    (messages, chunks)
+}
+
+/// Compressed chunks (zstd, the default, and lz4) read back with the `mcap`
+/// crate's reader as the uncompressed file: the same messages, byte for
+/// byte, in a smaller file.
+#[test]
+fn compressed_mcap_files_hold_the_same_messages() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let recording = ramp16();
+    let convert_to = |name: &str, compression: Option<&str>| {
+        let out = dir.path().join(name);
+        let mut args = vec![
+            recording.to_str().expect("utf-8"),
+            "-o",
+            out.to_str().expect("utf-8"),
+            "--max-frames",
+            "3",
+            "--no-estimates",
+            "-q",
+        ];
+        if let Some(compression) = compression {
+            args.extend(["--mcap-compression", compression]);
+        }
+        run(CONVERT, &args);
+        let size = std::fs::metadata(&out).expect("output").len();
+        let (messages, chunks) = messages_and_chunks(&out);
+        (size, messages, chunks)
+    };
+    let (plain_size, plain, chunks) = convert_to("none.mcap", Some("none"));
+    assert!(chunks.iter().all(String::is_empty), "{chunks:?}");
+    assert_eq!(plain.len(), 6, "a depth image and a cloud per frame");
+    for (name, compression, expected) in [
+        ("default.mcap", None, "zstd"),
+        ("lz4.mcap", Some("lz4"), "lz4"),
+    ] {
+        let (size, messages, chunks) = convert_to(name, compression);
+        assert!(
+            !chunks.is_empty() && chunks.iter().all(|c| c == expected),
+            "{name}: {chunks:?}"
+        );
+        assert!(
+            size * 10 < plain_size * 7,
+            "{name}: {size} of {plain_size} bytes"
+        );
+        assert_eq!(messages.len(), plain.len(), "{name}");
+        for (message, original) in messages.iter().zip(&plain) {
+            assert_eq!((&message.0, message.1), (&original.0, original.1), "{name}");
+            assert!(
+                message.2 == original.2,
+                "{name}: a payload of {} differs",
+                message.0
+            );
+        }
+    }
+}
+
+/// The `slope.recording` metadata records of the MCAP file at `path`.
+fn recording_metadata(path: &Path) -> Vec<BTreeMap<String, String>> {
+    let bytes = std::fs::read(path).expect("mcap file");
+    let summary = mcap::Summary::read(&bytes)
+        .expect("a summary")
+        .expect("a finished file");
+    summary
+        .metadata_indexes
+        .iter()
+        .map(|index| mcap::read::metadata(&bytes, index).expect("a metadata record"))
+        .filter(|metadata| metadata.name == "slope.recording")
+        .map(|metadata| metadata.metadata)
+        .collect()
+}
+
+/// The converted file names the recording's sensor, and gives its depth
+/// image's size, intrinsics and mount, as recording.toml has them.
+#[test]
+fn a_converted_recording_names_its_sensor() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("ramp16.mcap");
+    let recording = ramp16();
+    run(
+        CONVERT,
+        &[
+            recording.to_str().expect("utf-8"),
+            "-o",
+            out.to_str().expect("utf-8"),
+            "--max-frames",
+            "1",
+            "--no-estimates",
+            "-q",
+        ],
+    );
+    let records = recording_metadata(&out);
+    assert_eq!(records.len(), 1, "{records:?}");
+    let expected = [
+        ("sensor", "synthetic"),
+        ("width", "512"),
+        ("height", "424"),
+        ("fx", "365"),
+        ("fy", "365"),
+        ("cx", "255.5"),
+        ("cy", "211.5"),
+        ("mount_height_m", "0.5"),
+        ("mount_pitch_deg", "-20"),
+        ("mount_roll_deg", "0"),
+    ];
+    let expected: BTreeMap<String, String> = expected
+        .iter()
+        .map(|(k, v)| (k.to_string(), v.to_string()))
+        .collect();
+    assert_eq!(records[0], expected);
+}

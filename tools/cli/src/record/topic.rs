@@ -1,0 +1,265 @@
+//! The recording loop of the cloud topic: waits for clouds within the
+//! limits, rebuilds each one's images and hands them to the [`Sink`]
+//! opened at the first cloud (with the estimates, for an MCAP file).
+
+use std::time::{Duration, Instant};
+
+use anyhow::Context;
+use slope_ipc_types::{CloudHeader, CloudPoint, CloudSource};
+use slope_sensor::ipc::{create_node, CloudSubscriber, EstimateSubscriber};
+use slope_sensor::publish::StopFlag;
+use slope_sensor::recording::{ColorImage, DepthImage};
+use slope_sensor::source::SourceInfo;
+
+use super::args::{RecordArgs, RecordFormat, RecordLimits};
+use super::images::{cloud_to_images, sensor_of, TOPIC_DEPTH_UNIT_M};
+use super::mcap_output::{settle_estimates, write_estimates};
+use super::sink::Sink;
+use super::RecordStats;
+use crate::cli::node_name;
+
+/// Records the cloud topic until a limit is reached or `stop` is set.
+pub fn record_topic(
+    args: &RecordArgs,
+    limits: &RecordLimits,
+    stop: &StopFlag,
+) -> anyhow::Result<RecordStats> {
+    let names = args.common.service_names()?;
+    let node = create_node(&node_name("slope-record"))?;
+    let subscriber =
+        CloudSubscriber::create(&node, &names).context("cannot subscribe to clouds")?;
+    let estimates = match args.format() {
+        RecordFormat::Mcap => Some(
+            EstimateSubscriber::create(&node, &names).context("cannot subscribe to estimates")?,
+        ),
+        RecordFormat::Recording => None,
+    };
+    tracing::info!(service = subscriber.service_name(), out = %args.out_dir().display(), "recording the cloud topic");
+
+    let mut recorder = TopicRecorder::new(args, limits);
+    let slice = Duration::from_millis(100);
+    loop {
+        if stop.is_stopped() {
+            recorder.stats.stopped = true;
+            break;
+        }
+        if recorder.limit_reached(subscriber.service_name())? {
+            break;
+        }
+        subscriber.listener().wait(slice)?;
+        recorder.write_estimates(estimates.as_ref())?;
+        if recorder.receive_clouds(&subscriber)? {
+            break;
+        }
+    }
+    recorder.finish(estimates.as_ref(), stop)
+}
+
+/// The state of [`record_topic`]: the sink (opened at the first cloud,
+/// with that cloud's header), the images rebuilt from each cloud and the
+/// times the limits are measured from.
+struct TopicRecorder<'a> {
+    args: &'a RecordArgs,
+    limits: &'a RecordLimits,
+    stats: RecordStats,
+    writer: Option<(Sink, CloudHeader)>,
+    depth: DepthImage,
+    color: Option<ColorImage>,
+    last_index: Option<u64>,
+    waiting_since: Instant,
+    first_at: Option<Instant>,
+    last_at: Instant,
+}
+
+impl<'a> TopicRecorder<'a> {
+    fn new(args: &'a RecordArgs, limits: &'a RecordLimits) -> Self {
+        Self {
+            args,
+            limits,
+            stats: RecordStats::default(),
+            writer: None,
+            depth: DepthImage::default(),
+            color: None,
+            last_index: None,
+            waiting_since: Instant::now(),
+            first_at: None,
+            last_at: Instant::now(),
+        }
+    }
+
+    /// Whether --duration-s or --idle-timeout-s ends the recording; an
+    /// error when no cloud came on `service` within --wait-timeout-s.
+    fn limit_reached(&self, service: &str) -> anyhow::Result<bool> {
+        let limits = self.limits;
+        match self.first_at {
+            None => {
+                if let Some(timeout) = limits.wait_timeout {
+                    if self.waiting_since.elapsed() >= timeout {
+                        anyhow::bail!(
+                            "no cloud arrived on '{}' within {:.1} s; is a source (slope-capture, \
+                             slope-replay) running with the same --service-prefix?",
+                            service,
+                            timeout.as_secs_f64()
+                        );
+                    }
+                }
+            }
+            Some(first) => {
+                if limits.duration.is_some_and(|d| first.elapsed() >= d) {
+                    return Ok(true);
+                }
+                if limits
+                    .idle_timeout
+                    .is_some_and(|t| self.last_at.elapsed() >= t)
+                {
+                    tracing::info!("no cloud for the idle timeout; finishing");
+                    return Ok(true);
+                }
+            }
+        }
+        Ok(false)
+    }
+
+    /// Estimates (MCAP only) once the file exists; earlier ones belong to
+    /// clouds that were not recorded.
+    fn write_estimates(&mut self, estimates: Option<&EstimateSubscriber>) -> anyhow::Result<()> {
+        if let (Some(estimates), Some((Sink::Mcap(mcap), _))) = (estimates, &mut self.writer) {
+            self.stats.estimates += write_estimates(estimates, mcap)?;
+        }
+        Ok(())
+    }
+
+    /// Records the clouds received so far; true once --max-frames are.
+    fn receive_clouds(&mut self, subscriber: &CloudSubscriber) -> anyhow::Result<bool> {
+        while let Some(sample) = subscriber.receive()? {
+            if self.record_cloud(sample.header(), sample.points())? {
+                return Ok(true);
+            }
+        }
+        Ok(false)
+    }
+
+    /// Records one cloud (skipped when its payload or layout is not the
+    /// first's); true once --max-frames are recorded.
+    fn record_cloud(
+        &mut self,
+        header: &CloudHeader,
+        points: &[CloudPoint],
+    ) -> anyhow::Result<bool> {
+        self.last_at = Instant::now();
+        self.count_missed(header);
+        if points.len() != header.point_count() {
+            self.stats.skipped += 1;
+            tracing::warn!(
+                frame = header.frame_index,
+                "cloud with a payload that does not match its header; skipped"
+            );
+            return Ok(false);
+        }
+        let (sink, first) = match &mut self.writer {
+            Some((sink, first)) => (sink, *first),
+            None => {
+                let sink = open_sink(self.args, header)?;
+                self.first_at = Some(Instant::now());
+                let (sink, first) = self.writer.insert((sink, *header));
+                (sink, *first)
+            }
+        };
+        if !same_layout(header, &first) {
+            self.stats.skipped += 1;
+            tracing::warn!(
+                frame = header.frame_index,
+                sensor = header.sensor_name(),
+                "cloud with another size, intrinsics or sensor than the first; skipped"
+            );
+            return Ok(false);
+        }
+        cloud_to_images(
+            header,
+            points,
+            TOPIC_DEPTH_UNIT_M,
+            &mut self.depth,
+            &mut self.color,
+        );
+        let out = self.args.out_dir();
+        sink.write(
+            header,
+            points,
+            &self.depth,
+            self.color.as_ref(),
+            self.stats.written,
+            out,
+        )?;
+        self.stats.written += 1;
+        Ok(self
+            .limits
+            .max_frames
+            .is_some_and(|max| self.stats.written >= max))
+    }
+
+    /// Counts (and warns of) the clouds between the last one and `header`.
+    fn count_missed(&mut self, header: &CloudHeader) {
+        if let Some(expected) = self.last_index.and_then(|last| last.checked_add(1)) {
+            if header.frame_index > expected {
+                let missed = header.frame_index - expected;
+                self.stats.missed += missed;
+                tracing::warn!(
+                    missed,
+                    frame = header.frame_index,
+                    "clouds were missed (recorder too slow?)"
+                );
+            }
+        }
+        self.last_index = Some(header.frame_index);
+    }
+
+    /// Writes the last estimates (MCAP) and finishes the sink, if a cloud
+    /// opened one.
+    fn finish(
+        mut self,
+        estimates: Option<&EstimateSubscriber>,
+        stop: &StopFlag,
+    ) -> anyhow::Result<RecordStats> {
+        match self.writer {
+            Some((mut sink, _)) => {
+                if let (Some(estimates), Sink::Mcap(mcap)) = (estimates, &mut sink) {
+                    self.stats.estimates += settle_estimates(estimates, mcap, stop)?;
+                }
+                sink.finish(self.args.out_dir())?;
+            }
+            None => tracing::warn!("no cloud arrived; nothing was recorded"),
+        }
+        Ok(self.stats)
+    }
+}
+
+/// The sink of `args` for the clouds of `header`, the first one.
+fn open_sink(args: &RecordArgs, header: &CloudHeader) -> anyhow::Result<Sink> {
+    let info = SourceInfo {
+        width: header.width,
+        height: header.height,
+        intrinsics: header.intrinsics,
+        unit_m: TOPIC_DEPTH_UNIT_M,
+        mount: args.mount.over(header.mount),
+        source: CloudSource::from_raw(header.source).unwrap_or(CloudSource::Replay),
+        has_color: header.has_color != 0,
+        sensor: sensor_of(header).to_string(),
+    };
+    let sink = Sink::create(args, &info)?;
+    tracing::info!(
+        width = header.width,
+        height = header.height,
+        color = info.has_color,
+        sensor = info.sensor,
+        "first cloud; recording"
+    );
+    Ok(sink)
+}
+
+/// Whether a cloud has the size, intrinsics and sensor of the first.
+fn same_layout(header: &CloudHeader, first: &CloudHeader) -> bool {
+    header.width == first.width
+        && header.height == first.height
+        && header.intrinsics == first.intrinsics
+        && header.sensor == first.sensor
+}
