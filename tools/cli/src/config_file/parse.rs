@@ -1,0 +1,99 @@
+//! Reading a config file ([`SlopeFile::load`], [`SlopeFile::from_toml_str`])
+//! and writing one ([`SlopeFile::to_toml`]): TOML errors and unknown keys
+//! named with their full path and line, a file of the old layout refused
+//! with how to fix it.
+
+use std::path::Path;
+
+use super::error::ConfigFileError;
+use super::locate::{first_line_of, key_path, line_of};
+use super::sections::SlopeFile;
+
+/// The top-level keys of [`EstimatorConfig`](slope_pipeline::EstimatorConfig), which live under `[estimator]`.
+const ESTIMATOR_KEYS: [&str; 10] = [
+    "method",
+    "seed",
+    "outlier",
+    "ransac",
+    "pass_through",
+    "normals",
+    "kmeans",
+    "cumulative",
+    "selection",
+    "tracking",
+];
+
+impl SlopeFile {
+    /// Parses and validates a file's text; missing keys keep their defaults.
+    pub fn from_toml_str(text: &str) -> Result<Self, ConfigFileError> {
+        let table: toml::Table = toml::from_str(text).map_err(|e| ConfigFileError::Syntax {
+            line: e.span().map(|span| line_of(text, span.start)),
+            message: e.message().to_string(),
+        })?;
+        check_layout(text, &table)?;
+        let file: Self = toml::from_str(text).map_err(|e| key_error(text, &e))?;
+        file.validate()?;
+        Ok(file)
+    }
+
+    /// Reads `path`, or the defaults when `path` is `None`.
+    pub fn load(path: Option<&Path>) -> Result<Self, ConfigFileError> {
+        let Some(path) = path else {
+            return Ok(Self::default());
+        };
+        let text = std::fs::read_to_string(path).map_err(|source| ConfigFileError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::from_toml_str(&text).map_err(|e| ConfigFileError::InFile {
+            path: path.to_path_buf(),
+            source: Box::new(e),
+        })
+    }
+
+    /// Every key in effect, as TOML (`--print-config`).
+    pub fn to_toml(&self) -> Result<String, toml::ser::Error> {
+        toml::to_string(self)
+    }
+}
+
+/// A file laid out before the sections existed: how to fix it.
+fn check_layout(text: &str, table: &toml::Table) -> Result<(), ConfigFileError> {
+    if table.contains_key("kinect2") {
+        return Err(ConfigFileError::Key {
+            key: "kinect2".into(),
+            line: first_line_of(text, "kinect2"),
+            message:
+                "the capture settings are the section [capture]: rename [kinect2] to [capture]"
+                    .into(),
+        });
+    }
+    if let Some(key) = ESTIMATOR_KEYS.iter().find(|k| table.contains_key(**k)) {
+        let fix = if table.get(*key).is_some_and(toml::Value::is_table) {
+            format!("rename [{key}] to [estimator.{key}]")
+        } else {
+            format!("move `{key}` under [estimator]")
+        };
+        return Err(ConfigFileError::OldLayout {
+            key: (*key).to_string(),
+            fix,
+        });
+    }
+    Ok(())
+}
+
+/// A deserialisation error with the full path of the key it is about.
+fn key_error(text: &str, err: &toml::de::Error) -> ConfigFileError {
+    let message = err.message().to_string();
+    let Some(span) = err.span() else {
+        return ConfigFileError::Syntax {
+            line: None,
+            message,
+        };
+    };
+    ConfigFileError::Key {
+        key: key_path(text, &span),
+        line: Some(line_of(text, span.start)),
+        message,
+    }
+}
