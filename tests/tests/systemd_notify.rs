@@ -65,6 +65,18 @@ fn the_estimator_speaks_the_notify_protocol() {
         "{status}"
     );
     replay.wait_exit(deadline(20.0));
+    // The clouds stopped: within a few seconds the status says so (and its
+    // rate is the recent one, 0).
+    assert!(
+        read_notify_until(&socket, &mut seen, "STATUS=no cloud for", deadline(8.0)),
+        "{seen:?}"
+    );
+    let quiet = seen
+        .iter()
+        .rev()
+        .find(|m| m.starts_with("STATUS=no cloud for"))
+        .expect("found above");
+    assert!(quiet.contains("(0.0 fps)"), "{quiet}");
     estimator.signal(Signal::SIGTERM);
     assert!(
         read_notify_until(&socket, &mut seen, "STOPPING=1", deadline(5.0)),

@@ -7,7 +7,7 @@
 //! publisher's shared memory: the pipeline borrows the sample's slice.
 
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use anyhow::Context;
 use clap::Parser;
@@ -200,6 +200,7 @@ fn estimate(
             health_publisher,
             health_interval_s,
         ),
+        status: StatusRate::new(Instant::now()),
     };
     let mut silence = SilenceNote::new(
         "cloud",
@@ -213,6 +214,7 @@ fn estimate(
         worker.on_cloud_event()?;
         if worker.stats.processed > processed {
             silence.heard();
+            worker.status.heard(Instant::now());
         }
         silence.tick();
         manager.tick(|| worker.status_line(started.elapsed()));
@@ -241,6 +243,75 @@ fn index_gap(last: Option<StreamPosition>, next: &StreamPosition, max_gap_s: f64
     }
 }
 
+/// Clouds quiet this long make the status line say so.
+const QUIET_STATUS: Duration = Duration::from_secs(2);
+
+/// `912 frames in 31 s (29.4 fps), 3 dropped, last slope +16.02°`: totals
+/// since the start, the rate since the last line (not the mean since the
+/// start, which hides a camera that stopped), and once the clouds have been
+/// `quiet` for [`QUIET_STATUS`] or more, `no cloud for 12 s; ` before it.
+fn status_text(
+    stats: &EstimatorStats,
+    elapsed: Duration,
+    fps: f64,
+    last_slope_deg: Option<f64>,
+    quiet: Option<Duration>,
+) -> String {
+    let last = match last_slope_deg {
+        Some(slope) => format!("{slope:+.2}°"),
+        None => "-".to_string(),
+    };
+    let totals = format!(
+        "{} frames in {:.0} s ({fps:.1} fps), {} dropped, last slope {last}",
+        stats.processed,
+        elapsed.as_secs_f64(),
+        stats.dropped
+    );
+    match quiet {
+        Some(quiet) if quiet >= QUIET_STATUS => {
+            format!("no cloud for {:.0} s; {totals}", quiet.as_secs_f64())
+        }
+        _ => totals,
+    }
+}
+
+/// What the status line's rate and silence are measured from.
+#[derive(Debug, Clone, Copy)]
+struct StatusRate {
+    /// Clouds processed at the last status line, and when.
+    frames: u64,
+    at: Instant,
+    /// The last cloud processed (none yet: `None`).
+    last_cloud: Option<Instant>,
+}
+
+impl StatusRate {
+    fn new(now: Instant) -> Self {
+        Self {
+            frames: 0,
+            at: now,
+            last_cloud: None,
+        }
+    }
+
+    fn heard(&mut self, now: Instant) {
+        self.last_cloud = Some(now);
+    }
+
+    /// Clouds a second since the last call, with `processed` clouds now.
+    fn fps(&mut self, processed: u64, now: Instant) -> f64 {
+        let seconds = now.duration_since(self.at).as_secs_f64();
+        let frames = processed.saturating_sub(self.frames);
+        (self.frames, self.at) = (processed, now);
+        frames as f64 / seconds.max(1e-3)
+    }
+
+    /// How long since the last cloud (none yet: `None`).
+    fn quiet(&self, now: Instant) -> Option<Duration> {
+        self.last_cloud.map(|t| now.duration_since(t))
+    }
+}
+
 struct Worker<'a> {
     /// The estimator for the clouds of [`Worker::sensor`].
     estimator: Estimator,
@@ -259,23 +330,17 @@ struct Worker<'a> {
     last_slope_deg: Option<f64>,
     max_frames: Option<u64>,
     health: HealthReporter,
+    status: StatusRate,
 }
 
 impl Worker<'_> {
-    /// `30 frames in 1.0 s (30.0 fps), 0 dropped, last slope +16.01°`.
-    fn status_line(&self, elapsed: std::time::Duration) -> String {
-        let s = &self.stats;
-        let fps = s.processed as f64 / elapsed.as_secs_f64().max(1e-3);
-        let last = match self.last_slope_deg {
-            Some(slope) => format!("{slope:+.2}°"),
-            None => "-".to_string(),
-        };
-        format!(
-            "{} frames in {:.0} s ({fps:.1} fps), {} dropped, last slope {last}",
-            s.processed,
-            elapsed.as_secs_f64(),
-            s.dropped
-        )
+    /// The service manager's status line ([`status_text`]), the rate over
+    /// the time since the last one.
+    fn status_line(&mut self, elapsed: Duration) -> String {
+        let now = Instant::now();
+        let fps = self.status.fps(self.stats.processed, now);
+        let quiet = self.status.quiet(now);
+        status_text(&self.stats, elapsed, fps, self.last_slope_deg, quiet)
     }
 
     fn done(&self) -> bool {
@@ -377,6 +442,54 @@ mod tests {
             std::iter::once("slope-estimator").chain(args.iter().copied()),
         )
         .expect("valid arguments")
+    }
+
+    #[test]
+    fn the_status_line_gives_the_recent_rate_and_says_when_clouds_stop() {
+        let start = Instant::now();
+        let at = |s: f64| start + Duration::from_secs_f64(s);
+        let mut rate = StatusRate::new(start);
+        let stats = |processed| EstimatorStats {
+            processed,
+            dropped: 3,
+        };
+        // No cloud yet: the plain totals.
+        assert_eq!(
+            status_text(
+                &stats(0),
+                Duration::from_secs(2),
+                rate.fps(0, at(2.0)),
+                None,
+                rate.quiet(at(2.0))
+            ),
+            "0 frames in 2 s (0.0 fps), 3 dropped, last slope -"
+        );
+        // 60 clouds in the next 2 s, the last one just now: 30 fps.
+        rate.heard(at(4.0));
+        let line = status_text(
+            &stats(60),
+            Duration::from_secs(4),
+            rate.fps(60, at(4.0)),
+            Some(16.02),
+            rate.quiet(at(4.0)),
+        );
+        assert_eq!(
+            line,
+            "60 frames in 4 s (30.0 fps), 3 dropped, last slope +16.02°"
+        );
+        // Then nothing for 10 s: 0 fps now (the mean since the start would
+        // still say 4.3), and the line says for how long.
+        let line = status_text(
+            &stats(60),
+            Duration::from_secs(14),
+            rate.fps(60, at(14.0)),
+            Some(16.02),
+            rate.quiet(at(14.0)),
+        );
+        assert_eq!(
+            line,
+            "no cloud for 10 s; 60 frames in 14 s (0.0 fps), 3 dropped, last slope +16.02°"
+        );
     }
 
     #[test]
