@@ -97,8 +97,8 @@ fi
 for unit in "${units[@]}"; do
     case "$unit" in
     *.service)
-        grep -qx 'RestartPreventExitStatus=78' "$root/usr/lib/systemd/system/$unit" ||
-            fail "$unit lacks RestartPreventExitStatus=78 (a config error would restart forever)"
+        grep -qx 'RestartPreventExitStatus=78 2' "$root/usr/lib/systemd/system/$unit" ||
+            fail "$unit lacks RestartPreventExitStatus=78 2 (a config or usage error would restart forever)"
         ;;
     esac
 done

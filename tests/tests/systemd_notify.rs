@@ -7,7 +7,9 @@ use std::os::unix::net::UnixDatagram;
 use std::time::{Duration, Instant};
 
 use nix::sys::signal::Signal;
-use slope_integration_tests::{deadline, read_notify_until, recording, unique_prefix, Proc};
+use slope_integration_tests::{
+    deadline, read_notify_until, recording, repo_root, unique_prefix, Proc,
+};
 
 #[test]
 fn the_estimator_speaks_the_notify_protocol() {
@@ -127,6 +129,45 @@ fn a_config_error_says_failed_to_systemd() {
         Some(78),
         "{}",
         estimator.diagnostics()
+    );
+}
+
+#[test]
+fn a_refused_flag_says_failed_to_systemd_and_exits_2() {
+    // What SLOPE_ESTIMATOR_ARGS="--method foo" in /etc/default/slope does:
+    // the unit's RestartPreventExitStatus=78 2 must not restart it, and its
+    // status line must say why.
+    let dir = tempfile::tempdir().expect("temp dir");
+    let (socket, path) = notify_socket(dir.path());
+    let mut estimator = Proc::spawn_with_env(
+        "slope-estimator",
+        ["--method", "foo"],
+        &[("NOTIFY_SOCKET", path.to_str().expect("utf-8 path"))],
+    );
+    let mut seen = Vec::new();
+    assert!(
+        read_notify_until(
+            &socket,
+            &mut seen,
+            "STATUS=failed: invalid command line: ",
+            deadline(20.0)
+        ),
+        "{seen:?}\n{}",
+        estimator.diagnostics()
+    );
+    assert!(seen.iter().any(|m| m.contains("'foo'")), "{seen:?}");
+    let exit = estimator.wait_exit(deadline(10.0));
+    assert_eq!(
+        exit.and_then(|s| s.code()),
+        Some(2),
+        "{}",
+        estimator.diagnostics()
+    );
+    let unit = std::fs::read_to_string(repo_root().join("systemd/slope-estimator.service"))
+        .expect("the unit file");
+    assert!(
+        unit.lines().any(|l| l == "RestartPreventExitStatus=78 2"),
+        "the unit restarts on status 2"
     );
 }
 

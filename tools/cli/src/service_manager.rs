@@ -16,6 +16,30 @@ const STATUS_INTERVAL: Duration = Duration::from_secs(1);
 /// waiting for its device is not killed by the unit's start timeout.
 const START_EXTENSION: Duration = Duration::from_secs(5);
 
+/// The daemon's command line, parsed; a usage error (a typo in the flags
+/// of `/etc/default/slope`, say) is also sent to the service manager as
+/// `STATUS=failed: invalid command line: ...` before clap prints it and
+/// exits with status 2, which the units do not restart
+/// (`RestartPreventExitStatus=78 2`). `--help` and `--version` print as
+/// usual.
+pub fn parse_daemon_args<T: clap::Parser>() -> T {
+    T::try_parse().unwrap_or_else(|err| {
+        if err.use_stderr() {
+            send(&[NotifyState::Status(&usage_failure(&err.to_string()))]);
+        }
+        err.exit()
+    })
+}
+
+/// `failed: invalid command line: <clap's first line without "error: ">`.
+fn usage_failure(clap_message: &str) -> String {
+    let first = clap_message.lines().next().unwrap_or_default();
+    format!(
+        "failed: invalid command line: {}",
+        first.strip_prefix("error: ").unwrap_or(first)
+    )
+}
+
 /// Talks to the service manager, when there is one.
 #[derive(Debug)]
 pub struct ServiceManager {

@@ -2,12 +2,13 @@
 
 use std::process::ExitCode;
 
-use clap::Parser;
 use slope_tools::capture::{config_exit_code, run, CaptureArgs};
 use slope_tools::cli::{exit_status, stop_on_signals};
+use slope_tools::service_manager::parse_daemon_args;
 
 fn main() -> ExitCode {
-    let args = CaptureArgs::parse();
+    // A usage error is also the unit's status line (it is not restarted).
+    let args: CaptureArgs = parse_daemon_args();
     args.common.init_logging();
     let result = stop_on_signals().and_then(|stop| run(&args, &stop).map(drop));
     // Failures that a restart cannot cure exit with EX_CONFIG (78).
