@@ -69,15 +69,8 @@ pub(super) fn settle_estimates(
     let mut written = 0;
     let settle = Instant::now() + Duration::from_millis(300);
     while Instant::now() < settle && !stop.is_stopped() {
-        match estimates.receive()? {
-            Some(estimate) => {
-                mcap.write_estimate(&estimate)?;
-                written += 1;
-            }
-            None => {
-                estimates.listener().wait(Duration::from_millis(50))?;
-            }
-        }
+        written += write_estimates(estimates, mcap)?;
+        estimates.listener().wait(Duration::from_millis(50))?;
     }
     Ok(written)
 }
