@@ -3,7 +3,6 @@
 
 use std::collections::HashMap;
 
-use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
 use slope_ipc_types::{EstimateStatus, SlopeMethod};
 
@@ -20,11 +19,7 @@ pub struct StageMedians(pub Vec<(String, f64)>);
 
 impl Serialize for StageMedians {
     fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        let mut map = serializer.serialize_map(Some(self.0.len()))?;
-        for (name, ms) in &self.0 {
-            map.serialize_entry(name, ms)?;
-        }
-        map.end()
+        serializer.collect_map(self.0.iter().map(|(name, ms)| (name, ms)))
     }
 }
 
@@ -59,11 +54,7 @@ pub struct StatusCounts(pub Vec<(&'static str, usize)>);
 
 impl Serialize for StatusCounts {
     fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        let mut map = serializer.serialize_map(Some(self.0.len()))?;
-        for (name, count) in &self.0 {
-            map.serialize_entry(name, count)?;
-        }
-        map.end()
+        serializer.collect_map(self.0.iter().map(|(name, count)| (name, count)))
     }
 }
 
