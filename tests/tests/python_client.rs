@@ -172,9 +172,12 @@ fn venv_with_client() -> Result<PathBuf, String> {
 }
 
 /// The venv's interpreter, or `None` (the test skips) when the client
-/// cannot be installed and Python is not required.
+/// cannot be installed and Python is not required. The venv is made and
+/// the client installed once for all the tests of this file, which run in
+/// parallel: two `python3 -m venv` into one directory at once fail.
 fn client_python() -> Option<PathBuf> {
-    match venv_with_client() {
+    static VENV: std::sync::OnceLock<Result<PathBuf, String>> = std::sync::OnceLock::new();
+    match VENV.get_or_init(venv_with_client).clone() {
         Ok(bin) => Some(bin),
         Err(why) => {
             assert!(
