@@ -405,16 +405,7 @@ impl Context {
         pipeline: Pipeline,
         gpu_device: Option<u32>,
     ) -> Result<Device, Kinect2Error> {
-        if !pipeline.is_available() {
-            return Err(Kinect2Error::PipelineUnavailable {
-                pipeline: pipeline.name(),
-                available: Pipeline::available()
-                    .iter()
-                    .map(|p| p.name())
-                    .collect::<Vec<_>>()
-                    .join(", "),
-            });
-        }
+        check_pipeline_available(pipeline)?;
         // A known serial is locked before anything touches the USB bus.
         let mut device_lock = match selector {
             DeviceSelector::Serial(serial) => Some(DeviceLock::acquire(LOCK_KIND, serial)?),
@@ -423,34 +414,7 @@ impl Context {
         // One lock from enumeration to the open: nothing else in this
         // process can open or free a device in between.
         let mut state = lock(&self.inner);
-        let serials = enumerate_locked(&state)?;
-        if serials.is_empty() {
-            return Err(Kinect2Error::NoDevice {
-                version: library_version(),
-                libfreenect2_log: log::take_last_problem(),
-            });
-        }
-        let serial = match selector {
-            DeviceSelector::First => serials[0].clone(),
-            DeviceSelector::Index(index) => match serials.get(*index as usize) {
-                Some(serial) => serial.clone(),
-                None => {
-                    return Err(Kinect2Error::IndexOutOfRange {
-                        index: *index,
-                        count: u32::try_from(serials.len()).unwrap_or(u32::MAX),
-                    })
-                }
-            },
-            DeviceSelector::Serial(wanted) => {
-                if !serials.contains(wanted) {
-                    return Err(Kinect2Error::SerialNotFound {
-                        serial: wanted.clone(),
-                        connected: serials,
-                    });
-                }
-                wanted.clone()
-            }
-        };
+        let serial = choose_serial(selector, enumerate_locked(&state)?)?;
         let c_serial = std::ffi::CString::new(serial.as_str())
             .map_err(|_| Kinect2Error::InvalidSerial(serial.clone()))?;
         state.open.claim(&serial)?;
@@ -463,26 +427,7 @@ impl Context {
                 }
             }
         }
-        let gpu = gpu_device.map_or(-1, |id| i32::try_from(id).unwrap_or(i32::MAX));
-        let mut raw = std::ptr::null_mut();
-        log::clear_last_problem();
-        // SAFETY: the context is alive (we hold its lock); `c_serial` is a
-        // NUL-terminated string; `raw` is a valid out-pointer. The shim hands
-        // the pipeline's ownership to libfreenect2. Opening by serial (not by
-        // the index enumerated above) cannot pick another device should the
-        // bus change underneath.
-        let status = unsafe {
-            sys::f2s_context_open_serial(
-                state.handle.as_ptr(),
-                c_serial.as_ptr(),
-                pipeline.raw(),
-                gpu,
-                &mut raw,
-            )
-        };
-        let handle = check(status, "open the device", Some(&serial))
-            .and_then(|()| non_null(raw, "open the device", Some(&serial)));
-        let handle = match handle {
+        let handle = match open_claimed(&state, &c_serial, &serial, pipeline, gpu_device) {
             Ok(handle) => handle,
             Err(err) => {
                 state.open.release(&serial);
@@ -504,6 +449,83 @@ impl Context {
         check_opened_serial(&device.serial, &device.opened_serial()?)?;
         Ok(device)
     }
+}
+
+/// [`Kinect2Error::PipelineUnavailable`] unless this libfreenect2 build has
+/// `pipeline`, naming the ones it has.
+fn check_pipeline_available(pipeline: Pipeline) -> Result<(), Kinect2Error> {
+    if pipeline.is_available() {
+        return Ok(());
+    }
+    Err(Kinect2Error::PipelineUnavailable {
+        pipeline: pipeline.name(),
+        available: Pipeline::available()
+            .iter()
+            .map(|p| p.name())
+            .collect::<Vec<_>>()
+            .join(", "),
+    })
+}
+
+/// The serial `selector` picks among the connected `serials` (enumeration
+/// order), or why none fits.
+fn choose_serial(selector: &DeviceSelector, serials: Vec<String>) -> Result<String, Kinect2Error> {
+    if serials.is_empty() {
+        return Err(Kinect2Error::NoDevice {
+            version: library_version(),
+            libfreenect2_log: log::take_last_problem(),
+        });
+    }
+    match selector {
+        DeviceSelector::First => Ok(serials[0].clone()),
+        DeviceSelector::Index(index) => match serials.get(*index as usize) {
+            Some(serial) => Ok(serial.clone()),
+            None => Err(Kinect2Error::IndexOutOfRange {
+                index: *index,
+                count: u32::try_from(serials.len()).unwrap_or(u32::MAX),
+            }),
+        },
+        DeviceSelector::Serial(wanted) => {
+            if serials.contains(wanted) {
+                Ok(wanted.clone())
+            } else {
+                Err(Kinect2Error::SerialNotFound {
+                    serial: wanted.clone(),
+                    connected: serials,
+                })
+            }
+        }
+    }
+}
+
+/// Opens the device with serial `serial` (already claimed in `state`) with a
+/// depth `pipeline` on GPU `gpu_device` (`None`: libfreenect2's default).
+fn open_claimed(
+    state: &ContextState,
+    c_serial: &std::ffi::CStr,
+    serial: &str,
+    pipeline: Pipeline,
+    gpu_device: Option<u32>,
+) -> Result<NonNull<sys::f2s_device>, Kinect2Error> {
+    let gpu = gpu_device.map_or(-1, |id| i32::try_from(id).unwrap_or(i32::MAX));
+    let mut raw = std::ptr::null_mut();
+    log::clear_last_problem();
+    // SAFETY: the context is alive (the caller holds its lock, which `state`
+    // borrows from); `c_serial` is a NUL-terminated string; `raw` is a valid
+    // out-pointer. The shim hands the pipeline's ownership to libfreenect2.
+    // Opening by serial (not by the index enumerated before) cannot pick
+    // another device should the bus change underneath.
+    let status = unsafe {
+        sys::f2s_context_open_serial(
+            state.handle.as_ptr(),
+            c_serial.as_ptr(),
+            pipeline.raw(),
+            gpu,
+            &mut raw,
+        )
+    };
+    check(status, "open the device", Some(serial))
+        .and_then(|()| non_null(raw, "open the device", Some(serial)))
 }
 
 /// Which streams to run.

@@ -22,8 +22,8 @@ use slope_ipc_types::{CloudSource, Mount};
 
 use super::convert::{unmirror_color, unmirror_depth, unmirrored_intrinsics, DEPTH_UNIT_M};
 use super::device::{
-    Context, DepthConfig, Device, DeviceSelector, FrameFormat, FrameView, IrParams, Pipeline,
-    Streams, COLOR_HEIGHT, COLOR_WIDTH, DEPTH_HEIGHT, DEPTH_WIDTH,
+    Context, DepthConfig, Device, DeviceSelector, FrameFormat, FrameSet, FrameView, IrParams,
+    Pipeline, Streams, COLOR_HEIGHT, COLOR_WIDTH, DEPTH_HEIGHT, DEPTH_WIDTH,
 };
 use super::error::Kinect2Error;
 use super::log::depth_pipeline_errors;
@@ -166,32 +166,10 @@ impl Kinect2Source {
         mut on_wait: WaitHook,
     ) -> Result<Option<Self>, Kinect2Error> {
         let context = Context::new()?;
-        let mut backoff = options.min_backoff;
         let mut stats = CaptureStats::default();
-        let running = loop {
-            let Some(started) = start_interruptible(
-                &context,
-                &options,
-                &options.device,
-                &stop,
-                &mut on_wait,
-                &stats,
-            )?
-            else {
-                return Ok(None);
-            };
-            match started {
-                Ok(running) => break running,
-                Err(err) if options.wait_for_device && is_retryable(&err) => {
-                    stats.failed_opens += 1;
-                    tracing::warn!(error = %err, retry_in = ?backoff, "waiting for a Kinect v2");
-                    if !sleep_watched(&stop, backoff, &mut on_wait, &stats) {
-                        return Ok(None);
-                    }
-                    backoff = (backoff * 2).min(options.max_backoff);
-                }
-                Err(err) => return Err(err),
-            }
+        let Some(running) = start_waiting(&context, &options, &stop, &mut on_wait, &mut stats)?
+        else {
+            return Ok(None);
         };
         let serial = running.device.serial().to_string();
         let ir = *running.registration.ir_params();
@@ -341,67 +319,20 @@ impl Kinect2Source {
         // Indices count delivered frames only, so a gap downstream always
         // means a cloud was lost there, not a frame the camera spoiled.
         let index = self.next_index;
-        let Some(depth) = set.depth() else {
-            self.stats.malformed += 1;
-            tracing::warn!(serial = self.serial, "frame set without depth; skipped");
+        let Some((depth, color)) =
+            usable_images(&set, self.options.color, &self.serial, &mut self.stats)
+        else {
             return Ok(Some(false));
         };
-        let color = if self.options.color {
-            set.color()
-        } else {
-            None
-        };
-        if self.options.color && color.is_none() {
-            self.stats.malformed += 1;
-            tracing::warn!(serial = self.serial, "frame set without colour; skipped");
-            return Ok(Some(false));
-        }
-        let status = depth.status() | color.map_or(0, |c| c.status());
-        if status != 0 {
-            self.stats.bad_status += 1;
-            tracing::debug!(
-                serial = self.serial,
-                status,
-                "frame with non-zero status; skipped"
-            );
-            return Ok(Some(false));
-        }
-        // A layout libfreenect2 does not document (e.g. colour still JPEG)
-        // will not go away by reconnecting: fail instead.
-        check_layout(
+        let registered = register_images(
+            &mut running.registration,
             &self.serial,
             &depth,
-            DEPTH_WIDTH,
-            DEPTH_HEIGHT,
-            "depth",
-            |f| f == FrameFormat::Float,
+            color,
+            &mut self.undistorted,
+            &mut self.registered,
+            self.options.registration_filter,
         )?;
-        let registered = match color {
-            Some(color) => {
-                check_layout(
-                    &self.serial,
-                    &color,
-                    COLOR_WIDTH,
-                    COLOR_HEIGHT,
-                    "colour",
-                    |f| f == FrameFormat::Bgrx || f == FrameFormat::Rgbx,
-                )?;
-                running.registration.apply(
-                    &color,
-                    &depth,
-                    &mut self.undistorted,
-                    &mut self.registered,
-                    self.options.registration_filter,
-                )?;
-                Some(color.format())
-            }
-            None => {
-                running
-                    .registration
-                    .undistort(&depth, &mut self.undistorted)?;
-                None
-            }
-        };
         let (width, height) = (self.info.width, self.info.height);
         unmirror_depth(&self.undistorted, width, height, &mut frame.depth);
         match registered {
@@ -474,6 +405,38 @@ fn sleep_watched(
     }
 }
 
+/// Starts the device `options` select; with `options.wait_for_device`,
+/// retries with backoff (counted in `stats.failed_opens`) until one starts.
+/// `Ok(None)` when `stop` was set first.
+fn start_waiting(
+    context: &Context,
+    options: &Kinect2Options,
+    stop: &StopFlag,
+    on_wait: &mut WaitHook,
+    stats: &mut CaptureStats,
+) -> Result<Option<Running>, Kinect2Error> {
+    let mut backoff = options.min_backoff;
+    loop {
+        let Some(started) =
+            start_interruptible(context, options, &options.device, stop, on_wait, stats)?
+        else {
+            return Ok(None);
+        };
+        match started {
+            Ok(running) => return Ok(Some(running)),
+            Err(err) if options.wait_for_device && is_retryable(&err) => {
+                stats.failed_opens += 1;
+                tracing::warn!(error = %err, retry_in = ?backoff, "waiting for a Kinect v2");
+                if !sleep_watched(stop, backoff, on_wait, stats) {
+                    return Ok(None);
+                }
+                backoff = (backoff * 2).min(options.max_backoff);
+            }
+            Err(err) => return Err(err),
+        }
+    }
+}
+
 /// Opens and starts a device on a thread of its own ([`start_device`]
 /// blocks in libfreenect2 for seconds), waiting in slices: `Ok(None)` as
 /// soon as `stop` is set, whatever libfreenect2 is doing.
@@ -494,6 +457,63 @@ fn start_interruptible(
         move || start_device(&context, &options, &selector),
     )
     .map_err(|err| Kinect2Error::Background(err.to_string()))
+}
+
+/// The depth and (when wanted) colour images of `set`, or `None` when the
+/// set is skipped: an image missing or flagged by libfreenect2 (counted in
+/// `stats` and logged).
+fn usable_images<'s>(
+    set: &'s FrameSet<'_>,
+    want_color: bool,
+    serial: &str,
+    stats: &mut CaptureStats,
+) -> Option<(FrameView<'s>, Option<FrameView<'s>>)> {
+    let Some(depth) = set.depth() else {
+        stats.malformed += 1;
+        tracing::warn!(serial, "frame set without depth; skipped");
+        return None;
+    };
+    let color = if want_color { set.color() } else { None };
+    if want_color && color.is_none() {
+        stats.malformed += 1;
+        tracing::warn!(serial, "frame set without colour; skipped");
+        return None;
+    }
+    let status = depth.status() | color.map_or(0, |c| c.status());
+    if status != 0 {
+        stats.bad_status += 1;
+        tracing::debug!(serial, status, "frame with non-zero status; skipped");
+        return None;
+    }
+    Some((depth, color))
+}
+
+/// Checks the images' layouts, then undistorts `depth` into `undistorted`
+/// and, with `color`, registers the colour to it into `registered`.
+/// Returns the colour's pixel format (`None` without colour). A layout
+/// libfreenect2 does not document (e.g. colour still JPEG) will not go away
+/// by reconnecting, so it is an error.
+fn register_images(
+    registration: &mut Registration,
+    serial: &str,
+    depth: &FrameView<'_>,
+    color: Option<FrameView<'_>>,
+    undistorted: &mut [f32],
+    registered: &mut [u32],
+    filter: bool,
+) -> Result<Option<FrameFormat>, Kinect2Error> {
+    check_layout(serial, depth, DEPTH_WIDTH, DEPTH_HEIGHT, "depth", |f| {
+        f == FrameFormat::Float
+    })?;
+    let Some(color) = color else {
+        registration.undistort(depth, undistorted)?;
+        return Ok(None);
+    };
+    check_layout(serial, &color, COLOR_WIDTH, COLOR_HEIGHT, "colour", |f| {
+        f == FrameFormat::Bgrx || f == FrameFormat::Rgbx
+    })?;
+    registration.apply(&color, depth, undistorted, registered, filter)?;
+    Ok(Some(color.format()))
 }
 
 /// Fails unless `view` is `width x height` 4-byte pixels in a format `ok`

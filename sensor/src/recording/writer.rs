@@ -60,6 +60,55 @@ pub struct RecordingWriter {
     encoded: Vec<u8>,
 }
 
+/// A `map_err` for a failed write of `path`.
+fn write_error(path: &Path) -> impl FnOnce(std::io::Error) -> RecordingError {
+    let path = path.to_path_buf();
+    move |source| RecordingError::Write { path, source }
+}
+
+/// Creates `dir`, or checks that it is an empty directory.
+fn prepare_empty_dir(dir: &Path) -> Result<(), RecordingError> {
+    match fs::read_dir(dir) {
+        Ok(mut entries) => {
+            if entries.next().is_some() {
+                return Err(RecordingError::NotEmpty {
+                    path: dir.to_path_buf(),
+                });
+            }
+            Ok(())
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            fs::create_dir_all(dir).map_err(write_error(dir))
+        }
+        // Exists but is a file, or is unreadable.
+        Err(_) if dir.exists() && !dir.is_dir() => Err(RecordingError::NotEmpty {
+            path: dir.to_path_buf(),
+        }),
+        Err(source) => Err(RecordingError::Read {
+            path: dir.to_path_buf(),
+            source,
+        }),
+    }
+}
+
+/// Creates frames.csv at `path` with its header (a `slope_deg` column iff
+/// `per_frame_truth`), flushed.
+fn create_frames_csv(
+    path: &Path,
+    per_frame_truth: bool,
+) -> Result<csv::Writer<File>, RecordingError> {
+    let file = File::create(path).map_err(write_error(path))?;
+    let mut csv = csv::WriterBuilder::new().from_writer(file);
+    let mut header = vec!["index", "timestamp_ns", "depth", "color"];
+    if per_frame_truth {
+        header.push("slope_deg");
+    }
+    csv.write_record(&header)
+        .map_err(|e| csv_write_error(e, path))?;
+    csv.flush().map_err(write_error(path))?;
+    Ok(csv)
+}
+
 impl RecordingWriter {
     /// Creates `dir` (it must not exist, or be an empty directory), depth/ and color/ as needed,
     /// writes recording.toml and the frames.csv header (with a `slope_deg` column iff per_frame_truth).
@@ -70,35 +119,7 @@ impl RecordingWriter {
     ) -> Result<Self, RecordingError> {
         let meta_path = dir.join(META_FILE);
         validate_meta(meta, &meta_path)?;
-        let write_error = |path: &Path| {
-            let path = path.to_path_buf();
-            move |source| RecordingError::Write { path, source }
-        };
-
-        match fs::read_dir(dir) {
-            Ok(mut entries) => {
-                if entries.next().is_some() {
-                    return Err(RecordingError::NotEmpty {
-                        path: dir.to_path_buf(),
-                    });
-                }
-            }
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-                fs::create_dir_all(dir).map_err(write_error(dir))?;
-            }
-            // Exists but is a file, or is unreadable.
-            Err(_) if dir.exists() && !dir.is_dir() => {
-                return Err(RecordingError::NotEmpty {
-                    path: dir.to_path_buf(),
-                })
-            }
-            Err(source) => {
-                return Err(RecordingError::Read {
-                    path: dir.to_path_buf(),
-                    source,
-                })
-            }
-        }
+        prepare_empty_dir(dir)?;
         let depth_dir = dir.join(DEPTH_DIR);
         fs::create_dir(&depth_dir).map_err(write_error(&depth_dir))?;
 
@@ -110,15 +131,7 @@ impl RecordingWriter {
         fs::write(&meta_path, text).map_err(write_error(&meta_path))?;
 
         let frames_path = dir.join(FRAMES_FILE);
-        let file = File::create(&frames_path).map_err(write_error(&frames_path))?;
-        let mut csv = csv::WriterBuilder::new().from_writer(file);
-        let mut header = vec!["index", "timestamp_ns", "depth", "color"];
-        if per_frame_truth {
-            header.push("slope_deg");
-        }
-        let csv_error = |e: csv::Error| csv_write_error(e, &frames_path);
-        csv.write_record(&header).map_err(csv_error)?;
-        csv.flush().map_err(write_error(&frames_path))?;
+        let csv = create_frames_csv(&frames_path, per_frame_truth)?;
 
         tracing::debug!(dir = %dir.display(), per_frame_truth, "created recording");
         Ok(Self {
