@@ -83,7 +83,7 @@ impl SlopeMethod {
 /// Version 2 keeps every field of version 1 at the same offset (the first
 /// 160 bytes are the v1 layout) and appends the plane quality, the
 /// confidence and the tracked slope. The layout has no implicit padding
-/// (`reserved` fills the one gap); the test `layout_is_pinned` pins the size
+/// (`ground_seen_to_m`, an `f32`, fills the one gap); the test `layout_is_pinned` pins the size
 /// and every offset, for readers in other languages.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
@@ -135,9 +135,14 @@ pub struct SlopeEstimate {
     /// Why `confidence` is below 1: bits of [`crate::confidence`] (several
     /// may be set); see [`SlopeEstimate::confidence_reason_names`].
     pub confidence_reasons: u32,
-    /// Always 0: fills the gap before the next `f64`, so that the layout has
-    /// no implicit padding.
-    pub reserved: u32,
+    /// How far ahead the ground plane was seen, metres: the largest forward
+    /// distance of a ground inlier from the camera. Short of the sensor's
+    /// range (4-5 m on a Kinect v2) when the floor ends before a drop-off,
+    /// which `no_inclined_plane` alone cannot tell from a flat floor. NaN
+    /// without a measured ground plane; 0 from an estimator built before
+    /// this field (it was `reserved`, always 0). `f32` to fill the gap
+    /// before the next `f64` (no implicit padding).
+    pub ground_seen_to_m: f32,
     /// RMS distance of the ground plane's inliers from the plane, metres;
     /// NaN without a measured ground plane.
     pub ground_rms_m: f64,
@@ -215,7 +220,7 @@ impl Default for SlopeEstimate {
             processing_us: 0,
             confidence: 0.0,
             confidence_reasons: 0,
-            reserved: 0,
+            ground_seen_to_m: f32::NAN,
             ground_rms_m: f64::NAN,
             inclined_rms_m: f64::NAN,
             ground_area_m2: f64::NAN,
@@ -282,7 +287,7 @@ mod tests {
             ("processing_us", 152, 8),
             ("confidence", 160, 8),
             ("confidence_reasons", 168, 4),
-            ("reserved", 172, 4),
+            ("ground_seen_to_m", 172, 4),
             ("ground_rms_m", 176, 8),
             ("inclined_rms_m", 184, 8),
             ("ground_area_m2", 192, 8),
@@ -312,7 +317,7 @@ mod tests {
             processing_us,
             confidence,
             confidence_reasons,
-            reserved,
+            ground_seen_to_m,
             ground_rms_m,
             inclined_rms_m,
             ground_area_m2,
@@ -339,7 +344,6 @@ mod tests {
         let e = SlopeEstimate::default();
         assert_eq!(e.status(), EstimateStatus::BadFrame);
         assert_eq!((e.confidence, e.confidence_reasons), (0.0, 0));
-        assert_eq!(e.reserved, 0);
         for value in [
             e.ground_rms_m,
             e.inclined_rms_m,
@@ -347,6 +351,7 @@ mod tests {
             e.inclined_area_m2,
             e.tracked_slope_deg,
             e.tracked_std_deg,
+            f64::from(e.ground_seen_to_m),
         ] {
             assert!(value.is_nan());
         }

@@ -74,7 +74,7 @@ pub mod layout {
             frame_index, capture_stamp_ns, publish_stamp_ns, source_stamp_ns, dropped_frames,
             status, method, slope_deg, slope_std_deg, distance_m, ground_plane, inclined_plane,
             ground_inliers, inclined_inliers, samples, ground_from_mount, processing_us,
-            confidence, confidence_reasons, reserved, ground_rms_m, inclined_rms_m,
+            confidence, confidence_reasons, ground_seen_to_m, ground_rms_m, inclined_rms_m,
             ground_area_m2, inclined_area_m2, tracked_slope_deg, tracked_std_deg,
             tracked_frames, tracked_accepted,
         )

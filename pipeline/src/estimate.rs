@@ -25,6 +25,10 @@ pub struct Estimate {
     pub inclined: Option<PlaneEstimate>,
     /// True when the ground normal is the mount's up vector.
     pub ground_from_mount: bool,
+    /// How far ahead the ground plane was seen, metres (`ground_reach.rs`):
+    /// short of the sensor's range before a drop-off. NaN without a
+    /// measured ground plane.
+    pub ground_seen_to_m: f64,
     /// How far to trust `slope_deg`, 0..=1 (0 unless `Ok`).
     pub confidence: f64,
     /// Why the confidence is below 1: bits of
@@ -49,6 +53,7 @@ impl Estimate {
             ground: None,
             inclined: None,
             ground_from_mount: false,
+            ground_seen_to_m: f64::NAN,
             confidence: 0.0,
             confidence_reasons: 0,
             tracked: None,

@@ -25,6 +25,7 @@ use crate::config::{EstimatorConfig, NormalsConfig, PassThroughConfig};
 use crate::cosine_kmeans::CosineKmeans;
 use crate::cumulative_angle::{cumulative_angle, rotation_axis};
 use crate::finish::{finish, flat_ground_estimate, Fit};
+use crate::ground_reach::ground_seen_to_m;
 use crate::literal::{
     DepthPassThrough, EveryPointRansac, KnnNormalEstimator, KnnOutlierFilter, NormalsNeighbourhood,
     OutlierNeighbourhood, PassThroughMode, RansacScoring,
@@ -34,7 +35,8 @@ use crate::pass_through::PassThrough;
 use crate::plane_fit::Plane;
 use crate::ransac_planes::{PlaneSegmenter, SegmentedPlane, Threshold};
 use crate::selection::{
-    chosen_segments, select_ground, select_inclined, Ground, PlaneSegment, PlaneSummary, Selection,
+    chosen_segments, forward_direction, select_ground, select_inclined, Ground, PlaneSegment,
+    PlaneSummary, Selection,
 };
 use crate::statistical_outlier::StatisticalOutlierFilter;
 use crate::tracking::{FrameSlope, SlopeTracker, StreamPosition};
@@ -221,7 +223,7 @@ impl Estimator {
         let selection = match selection {
             None => return Err(EstimateStatus::NoGround),
             Some(Ok(selection)) => selection,
-            Some(Err(ground)) => return Ok(self.ground_only(ground)),
+            Some(Err(ground)) => return Ok(self.ground_only(cloud, ground)),
         };
         self.keep_roles(&selection);
         let (inclined, ground) = chosen_segments(
@@ -246,13 +248,17 @@ impl Estimator {
                 fit
             }
         };
-        let estimate = finish(
+        let mut estimate = finish(
             self.config.method,
             &fit,
             &inclined,
             ground.as_ref(),
             &selection,
         )?;
+        if let Some(ground) = &ground {
+            estimate.ground_seen_to_m =
+                ground_seen_to_m(cloud.points, ground.inliers, &selection.forward);
+        }
         clock.lap("confidence");
         Ok(estimate)
     }
@@ -332,7 +338,7 @@ impl Estimator {
     /// No inclined plane: the estimate says so, with the ground plane (its
     /// TLS fit) when one was seen, so that a planner knows the floor ahead
     /// is flat and where it is.
-    fn ground_only(&mut self, ground: Ground) -> Estimate {
+    fn ground_only(&mut self, cloud: &CloudView<'_>, ground: Ground) -> Estimate {
         let mut estimate = Estimate::failed(EstimateStatus::NoInclinedPlane, self.config.method);
         if let Ground::Planes(members) = ground {
             self.roles.ground.extend_from_slice(&members);
@@ -343,6 +349,9 @@ impl Estimator {
                 &mut self.ground_pixels,
             );
             estimate.ground = flat_ground_estimate(&segment);
+            // The lowest ground plane's normal is up, as for the selection.
+            let forward = forward_direction(&self.summaries[members[0]].plane.normal);
+            estimate.ground_seen_to_m = ground_seen_to_m(cloud.points, segment.inliers, &forward);
         }
         estimate
     }

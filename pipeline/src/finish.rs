@@ -64,6 +64,7 @@ pub(crate) fn finish(
         ground: ground_plane.zip(ground).map(|(p, g)| plane_estimate(g, &p)),
         inclined: Some(plane_estimate(inclined, &incl_plane)),
         ground_from_mount: ground.is_none(),
+        ground_seen_to_m: f64::NAN,
         confidence: confidence.value,
         confidence_reasons: confidence.reasons,
         tracked: None,

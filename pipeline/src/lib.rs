@@ -19,6 +19,7 @@
 //! | `sensor_noise.rs` | the depth sensor's noise, the yardstick of flatness |
 //! | `finish.rs` | the estimate from a method's fit: sign, distance, planes, confidence (the paper method checked against TLS) |
 //! | `confidence.rs` | how far to trust an estimate, and why |
+//! | `ground_reach.rs` | how far ahead the ground was seen (where a floor ends before a drop-off) |
 //! | `tracking.rs` | the slope of the plane ahead followed over frames |
 //! | `message.rs` | an estimate written into the `SlopeEstimate` message |
 //! | `estimator.rs` | orchestration and timings |
@@ -41,6 +42,7 @@ pub mod estimator;
 mod finish;
 #[doc(hidden)]
 pub mod fixtures;
+pub mod ground_reach;
 mod inspection;
 pub mod literal;
 pub mod message;

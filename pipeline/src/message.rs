@@ -8,7 +8,8 @@ use crate::estimate::Estimate;
 impl Estimate {
     /// Fills the estimate's fields of `msg` (not the stamps, frame index or
     /// drop counter, which belong to the caller). An absent plane leaves its
-    /// coefficients and inliers 0 and its RMS and area NaN; an absent track
+    /// coefficients and inliers 0 and its RMS and area NaN (and, for the
+    /// ground, how far it was seen); an absent track
     /// leaves the tracked slope and spread NaN and its counts 0.
     pub fn write_message(&self, msg: &mut SlopeEstimate) {
         msg.status = self.status as u32;
@@ -25,7 +26,7 @@ impl Estimate {
         msg.processing_us = (self.timings.total_ms * 1000.0).round().max(0.0) as u64;
         msg.confidence = self.confidence;
         msg.confidence_reasons = self.confidence_reasons;
-        msg.reserved = 0;
+        msg.ground_seen_to_m = self.ground_seen_to_m as f32;
         msg.ground_rms_m = self.ground.map_or(f64::NAN, |p| p.rms_m);
         msg.inclined_rms_m = self.inclined.map_or(f64::NAN, |p| p.rms_m);
         msg.ground_area_m2 = self.ground.map_or(f64::NAN, |p| p.area_m2);
@@ -71,6 +72,7 @@ mod tests {
         inclined.rms_m = 0.004;
         inclined.area_m2 = 0.8;
         e.ground_from_mount = false;
+        e.ground_seen_to_m = 4.25;
         e.confidence = 0.75;
         e.confidence_reasons = confidence::FEW_POINTS | confidence::NEAR_BORDER;
         e.tracked = Some(TrackedSlope {
@@ -90,7 +92,6 @@ mod tests {
             frame_index: 42,
             capture_stamp_ns: 7,
             dropped_frames: 3,
-            reserved: 99,
             ..SlopeEstimate::default()
         };
         e.write_message(&mut msg);
@@ -117,7 +118,7 @@ mod tests {
         assert_eq!(msg.confidence, 0.75);
         let reasons: Vec<_> = msg.confidence_reason_names().collect();
         assert_eq!(reasons, ["few_points", "near_border"]);
-        assert_eq!(msg.reserved, 0);
+        assert_eq!(msg.ground_seen_to_m, 4.25);
         assert_eq!(
             (msg.tracked_slope_deg, msg.tracked_std_deg),
             (-12.25, 0.125)
@@ -132,6 +133,7 @@ mod tests {
             ground: None,
             inclined: None,
             ground_from_mount: true,
+            ground_seen_to_m: f64::NAN,
             confidence: 0.0,
             confidence_reasons: confidence::GROUND_FROM_MOUNT,
             tracked: None,
@@ -151,6 +153,7 @@ mod tests {
             msg.inclined_area_m2,
             msg.tracked_slope_deg,
             msg.tracked_std_deg,
+            f64::from(msg.ground_seen_to_m),
         ] {
             assert!(value.is_nan());
         }

@@ -8,7 +8,9 @@ The speed rule is an example, not advice: slower on steeper ramps, stop above
 --max-slope or when the estimate is not trusted, and --no-ramp-speed when no
 ramp is seen (`no_inclined_plane`): the camera sees no surface where the floor
 drops away, so a step or slope down beyond the floor's edge reads the same as
-a flat floor; only other sensors (cliff sensors, a map) allow full speed there.
+a flat floor. What differs is how far ahead the floor was seen
+(`ground_seen_to_m`): where it ends closer than --min-ground-ahead, stop. Only
+other sensors (cliff sensors, a map) allow full speed there.
 The slope is the tracked one while this frame agrees with the track; when it
 does not (the track is about to follow a new surface, or this frame is an
 outlier), the steeper of the two.
@@ -23,11 +25,19 @@ import slope_client
 
 
 def speed_for(
-    estimate, max_slope_deg: float, min_confidence: float, no_ramp_speed: float
+    estimate,
+    max_slope_deg: float,
+    min_confidence: float,
+    no_ramp_speed: float,
+    min_ground_ahead_m: float,
 ) -> float:
     """Fraction of full speed for this estimate."""
     if estimate.status_name == "no_inclined_plane":
-        return no_ramp_speed  # no ramp seen: a flat floor, or a drop-off the camera cannot see
+        # No ramp seen: a flat floor, or a drop-off the camera cannot see.
+        seen = estimate.ground_seen_to
+        if seen is not None and seen < min_ground_ahead_m:
+            return 0.0  # the floor ends close ahead: stop before its edge
+        return no_ramp_speed
     if not estimate.ok or estimate.confidence < min_confidence:
         return 0.0  # not sure: stop
     slope = estimate.slope_deg
@@ -104,6 +114,13 @@ def main() -> int:
         help="fraction of full speed when no ramp is seen (default 0.5): a drop-off the camera "
         "cannot see looks the same",
     )
+    parser.add_argument(
+        "--min-ground-ahead",
+        type=positive_float,
+        default=1.0,
+        help="metres (default 1.0): with no ramp seen, stop when the floor was seen to end closer "
+        "than this (ground_seen_to_m), a drop-off",
+    )
     args = parser.parse_args()
 
     seen = 0
@@ -111,7 +128,13 @@ def main() -> int:
         estimates = slope_client.subscribe(args.prefix, timeout_s=args.timeout_s)
         print(f"subscribed to {estimates.name}", file=sys.stderr, flush=True)
         for estimate in estimates:
-            speed = speed_for(estimate, args.max_slope, args.min_confidence, args.no_ramp_speed)
+            speed = speed_for(
+                estimate,
+                args.max_slope,
+                args.min_confidence,
+                args.no_ramp_speed,
+                args.min_ground_ahead,
+            )
             if args.json:
                 record = estimate.to_dict()
                 record["speed"] = speed

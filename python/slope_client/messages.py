@@ -59,7 +59,7 @@ class SlopeEstimate(ctypes.Structure):
         ("processing_us", ctypes.c_uint64),
         ("confidence", ctypes.c_double),
         ("confidence_reasons", ctypes.c_uint32),
-        ("reserved", ctypes.c_uint32),
+        ("ground_seen_to_m", ctypes.c_float),
         ("ground_rms_m", ctypes.c_double),
         ("inclined_rms_m", ctypes.c_double),
         ("ground_area_m2", ctypes.c_double),
@@ -100,6 +100,14 @@ class SlopeEstimate(ctypes.Structure):
                 names.append(CONFIDENCE_REASONS[bit] if known else f"bit_{bit}")
         return names
 
+    @property
+    def ground_seen_to(self):
+        """How far ahead the ground was seen, metres (`ground_seen_to_m`), or None
+        without a measured ground or from an estimator older than the field (0).
+        Short of the sensor's range where the floor ends before a drop-off."""
+        seen = self.ground_seen_to_m
+        return seen if math.isfinite(seen) and seen > 0 else None
+
     def to_dict(self) -> dict:
         """Every field, NaN as None and absent planes as None (as `slope-echo --json`)."""
 
@@ -123,6 +131,7 @@ class SlopeEstimate(ctypes.Structure):
             "dropped_frames": self.dropped_frames,
             "ground_plane": plane(self.ground_plane),
             "inclined_plane": plane(self.inclined_plane),
+            "ground_seen_to_m": self.ground_seen_to,
             "confidence": self.confidence,
             "confidence_reasons": self.confidence_reason_names,
             "tracked_slope_deg": finite(self.tracked_slope_deg),

@@ -15,7 +15,7 @@ use slope_integration_tests::{
 use slope_sensor::recording::Recording;
 
 /// Every key of `slope-echo --json`: the fields of `slope.SlopeEstimate.v2`.
-const ECHO_KEYS: [&str; 28] = [
+const ECHO_KEYS: [&str; 29] = [
     "frame",
     "timestamp_ns",
     "publish_stamp_ns",
@@ -35,6 +35,7 @@ const ECHO_KEYS: [&str; 28] = [
     "inclined_rms_m",
     "ground_area_m2",
     "inclined_area_m2",
+    "ground_seen_to_m",
     "samples",
     "ground_from_mount",
     "processing_ms",
@@ -84,6 +85,10 @@ fn check_v2_fields(e: &Value, truth: f64) {
         assert!(number(e, &format!("{plane}_rms_m")) >= 0.0, "{e}");
         assert!(number(e, &format!("{plane}_area_m2")) > 0.0, "{e}");
     }
+    // How far ahead the ground was seen: some metres (a Kinect sees up to
+    // 4.5 m), carried across the processes as an f32.
+    let seen = number(e, "ground_seen_to_m");
+    assert!((0.3..6.0).contains(&seen), "{e}");
     let confidence = number(e, "confidence");
     assert!((0.0..=1.0).contains(&confidence), "{e}");
     assert!(e["confidence_reasons"].is_array(), "{e}");

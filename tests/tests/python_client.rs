@@ -314,24 +314,30 @@ fn the_example_planner_slows_down_where_it_cannot_see_the_floor_ahead() {
     }
     // `speed_for` alone, on stand-ins for estimates: no ramp seen is
     // --no-ramp-speed (a drop-off the camera cannot see reads the same),
-    // never full speed; an untrusted estimate stops; a trusted 10° ramp is
-    // half speed at --max-slope 20.
+    // never full speed, and a stop where the floor was seen to end closer
+    // than --min-ground-ahead (1 m here; unknown reach: --no-ramp-speed); an
+    // untrusted estimate stops; a trusted 10° ramp is half speed at
+    // --max-slope 20.
     let planner = repo_root().join("python/examples/planner.py");
     let code = format!(
         "import importlib.util, types\n\
          spec = importlib.util.spec_from_file_location('planner', {planner:?})\n\
          planner = importlib.util.module_from_spec(spec)\n\
          spec.loader.exec_module(planner)\n\
-         def estimate(status, ok, confidence, slope):\n\
+         def estimate(status, ok, confidence, slope, seen=None):\n\
          \x20   return types.SimpleNamespace(status_name=status, ok=ok, confidence=confidence,\n\
-         \x20       slope_deg=slope, tracked_slope_deg=slope, tracked_accepted=True)\n\
-         print(planner.speed_for(estimate('no_inclined_plane', False, 0.0, float('nan')), 20, 0.5, 0.4))\n\
-         print(planner.speed_for(estimate('ok', True, 0.3, 10.0), 20, 0.5, 0.4))\n\
-         print(planner.speed_for(estimate('ok', True, 0.9, 10.0), 20, 0.5, 0.4))\n"
+         \x20       slope_deg=slope, tracked_slope_deg=slope, tracked_accepted=True,\n\
+         \x20       ground_seen_to=seen)\n\
+         nan = float('nan')\n\
+         print(planner.speed_for(estimate('no_inclined_plane', False, 0.0, nan), 20, 0.5, 0.4, 1.0))\n\
+         print(planner.speed_for(estimate('no_inclined_plane', False, 0.0, nan, 0.8), 20, 0.5, 0.4, 1.0))\n\
+         print(planner.speed_for(estimate('no_inclined_plane', False, 0.0, nan, 3.5), 20, 0.5, 0.4, 1.0))\n\
+         print(planner.speed_for(estimate('ok', True, 0.3, 10.0), 20, 0.5, 0.4, 1.0))\n\
+         print(planner.speed_for(estimate('ok', True, 0.9, 10.0), 20, 0.5, 0.4, 1.0))\n"
     );
     let out = run_python(&code);
     assert_eq!(
         out.split_whitespace().collect::<Vec<_>>(),
-        ["0.4", "0.0", "0.5"]
+        ["0.4", "0.0", "0.4", "0.0", "0.5"]
     );
 }

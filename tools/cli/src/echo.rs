@@ -34,8 +34,9 @@ spread (- without a track) and the confidence (with the reasons when below 1).
 JSON fields: frame, timestamp_ns (capture, ns since the Unix epoch), publish_stamp_ns, \
 source_stamp_ns, status, method, slope_deg, std_deg, distance_m, latency_ms (capture to \
 publish), dropped_frames, ground_plane, inclined_plane ([a, b, c, d] or null), ground_inliers, \
-inclined_inliers, ground_rms_m, inclined_rms_m, ground_area_m2, inclined_area_m2, samples, \
-ground_from_mount, processing_ms, confidence, confidence_reasons (names), tracked_slope_deg, \
+inclined_inliers, ground_rms_m, inclined_rms_m, ground_area_m2, inclined_area_m2, \
+ground_seen_to_m (how far ahead the ground was seen, metres: short of the sensor's range before a \
+drop-off), samples, ground_from_mount, processing_ms, confidence, confidence_reasons (names), tracked_slope_deg, \
 tracked_std_deg, tracked_frames, tracked_accepted.
 
 Health lines (--health) show, per report: the daemon and its pid, uptime, rates in and out, \
@@ -97,6 +98,7 @@ pub struct EstimateJson {
     pub inclined_rms_m: Option<f64>,
     pub ground_area_m2: Option<f64>,
     pub inclined_area_m2: Option<f64>,
+    pub ground_seen_to_m: Option<f64>,
     pub samples: u32,
     pub ground_from_mount: bool,
     pub processing_ms: f64,
@@ -110,6 +112,12 @@ pub struct EstimateJson {
 
 fn finite(value: f64) -> Option<f64> {
     value.is_finite().then_some(value)
+}
+
+/// How far ahead the ground was seen, `None` without a measured ground (NaN)
+/// or from an estimator older than the field (0).
+fn seen_to_m(e: &SlopeEstimate) -> Option<f64> {
+    finite(f64::from(e.ground_seen_to_m)).filter(|&m| m > 0.0)
 }
 
 /// A plane of the message, `None` when absent (all zero).
@@ -139,6 +147,7 @@ impl From<&SlopeEstimate> for EstimateJson {
             inclined_rms_m: finite(e.inclined_rms_m),
             ground_area_m2: finite(e.ground_area_m2),
             inclined_area_m2: finite(e.inclined_area_m2),
+            ground_seen_to_m: seen_to_m(e),
             samples: e.samples,
             ground_from_mount: e.ground_from_mount != 0,
             processing_ms: e.processing_us as f64 / 1000.0,
@@ -175,8 +184,12 @@ pub fn format_line(e: &SlopeEstimate) -> String {
             confidence_text(e)
         )
     } else if e.ground_plane != [0.0; 4] {
-        // No slope, but the ground was measured: flat floor ahead.
-        let ground = format!("ground {:.2} m below", e.ground_plane[3]);
+        // No slope, but the ground was measured: flat floor ahead, as far
+        // as it was seen (a drop-off shows as a short reach).
+        let mut ground = format!("ground {:.2} m below", e.ground_plane[3]);
+        if let Some(seen) = seen_to_m(e) {
+            ground.push_str(&format!(", seen to {seen:.2} m ahead"));
+        }
         format!("{head}  {:<30} {ground}  {tail}", status.name())
     } else {
         format!("{head}  {:<30} {tail}", status.name())
@@ -425,6 +438,7 @@ mod tests {
             inclined_rms_m: 0.003,
             ground_area_m2: 3.5,
             inclined_area_m2: 0.8,
+            ground_seen_to_m: 0.0,
             samples: 1000,
             processing_us: 25_000,
             confidence: 0.62,
@@ -471,6 +485,16 @@ mod tests {
         let line = format_line(&flat);
         assert!(line.contains("no_inclined_plane"), "{line}");
         assert!(line.contains("ground 0.61 m below"), "{line}");
+        assert!(!line.contains("seen to"), "{line}");
+        let edge = SlopeEstimate {
+            ground_seen_to_m: 1.84,
+            ..flat
+        };
+        let line = format_line(&edge);
+        assert!(
+            line.contains("ground 0.61 m below, seen to 1.84 m ahead"),
+            "{line}"
+        );
         let nothing = SlopeEstimate {
             status: EstimateStatus::NoInclinedPlane as u32,
             ..SlopeEstimate::default()
@@ -496,7 +520,15 @@ mod tests {
         assert_eq!(value["tracked_frames"], 9);
         assert_eq!(value["tracked_accepted"], true);
         assert_eq!(value["publish_stamp_ns"], 1_020_000_000u64);
-        assert_eq!(value.as_object().unwrap().len(), 28);
+        // 0 is what an estimator older than the field sends: unknown.
+        assert_eq!(value["ground_seen_to_m"], serde_json::Value::Null);
+        let seen = SlopeEstimate {
+            ground_seen_to_m: 3.5,
+            ..ok_estimate()
+        };
+        let seen = serde_json::to_value(EstimateJson::from(&seen)).unwrap();
+        assert_eq!(seen["ground_seen_to_m"], 3.5);
+        assert_eq!(value.as_object().unwrap().len(), 29);
 
         let failed = SlopeEstimate {
             status: EstimateStatus::NoInclinedPlane as u32,

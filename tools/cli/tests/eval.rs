@@ -335,6 +335,7 @@ fn check_report(report: &Value, truth: Option<f64>) -> &Value {
                 "inclined_rms_m",
                 "ground_area_m2",
                 "inclined_area_m2",
+                "ground_seen_to_m",
                 "confidence",
                 "confidence_reasons",
                 "ground_from_mount",
@@ -959,6 +960,11 @@ fn the_bundled_ramp_reports_planes_quality_confidence_and_track() {
             assert!(inliers("inclined_inliers") > 10_000, "{estimate}");
             assert!(inliers("ground_inliers") > 10_000, "{estimate}");
             assert!(num(&estimate["inclined_area_m2"]) > 1.0, "{estimate}");
+            // The ground ends at the ramp's foot line, 1.5 m ahead in the
+            // recording's scene; its RANSAC band takes in the ramp's first
+            // few centimetres (less than 3 cm rise there).
+            let seen = num(&estimate["ground_seen_to_m"]);
+            assert!((1.35..1.62).contains(&seen), "{estimate}");
             // Millimetre depth with Kinect noise: RMS of a few millimetres.
             assert!(num(&estimate["ground_rms_m"]) < 0.02, "{estimate}");
             assert!(num(&estimate["inclined_rms_m"]) < 0.02, "{estimate}");

@@ -29,7 +29,8 @@ abs_error_deg = | median over ok frames of |slope_deg|  -  truth_deg |\n\
 (median_frame_error_deg in the JSON is the median of the per-frame | |slope_deg| - truth |).\n\n\
 Each recording gets fresh estimators that see its frames in order, so the tracked slope follows \
 the recording. Per frame the JSON also gives both planes ([a, b, c, d], camera frame), their \
-inliers, RMS and area, the confidence and its reasons, ground_from_mount and the tracked slope; \
+inliers, RMS and area, the confidence and its reasons, ground_from_mount, how far ahead the \
+ground was seen (ground_seen_to_m) and the tracked slope; \
 the summary counts the ok frames whose confidence is below 0.5 (low_confidence_frames).\n\n\
 A frame whose depth image cannot be read is reported with status bad_frame and its error; the \
 evaluation goes on. A recording that cannot be opened, whose frames.csv lists no frames or none \

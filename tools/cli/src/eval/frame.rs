@@ -51,6 +51,9 @@ pub struct FrameDetails {
     /// Surface the inliers cover, square metres.
     pub ground_area_m2: Option<f64>,
     pub inclined_area_m2: Option<f64>,
+    /// How far ahead the ground was seen, metres (short of the sensor's
+    /// range before a drop-off); `None` without a measured ground.
+    pub ground_seen_to_m: Option<f64>,
     /// How far to trust `slope_deg`, 0..=1 (0 unless `ok`).
     pub confidence: Option<f64>,
     /// Why the confidence is below 1, by name.
@@ -102,6 +105,7 @@ impl FrameDetails {
             inclined_rms_m: inclined.map(rms),
             ground_area_m2: ground.map(area),
             inclined_area_m2: inclined.map(area),
+            ground_seen_to_m: Some(estimate.ground_seen_to_m).filter(|m| m.is_finite()),
             confidence: Some(estimate.confidence),
             confidence_reasons: Some(
                 slope_ipc_types::confidence::names(estimate.confidence_reasons).collect(),
