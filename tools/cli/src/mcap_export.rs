@@ -111,7 +111,8 @@ fn estimate_schema() -> String {
             "confidence": {"type": "number"},
             "confidence_reasons": {"type": "array", "items": {"type": "string"}},
             "tracked_slope_deg": number, "tracked_std_deg": number,
-            "ground_plane": plane, "inclined_plane": plane
+            "ground_plane": plane, "inclined_plane": plane,
+            "ground_seen_to_m": number
         },
         "additionalProperties": true
     })
