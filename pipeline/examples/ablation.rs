@@ -267,6 +267,44 @@ impl Tally {
         v.sort_by(f64::total_cmp);
         v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
     }
+
+    /// Estimates `case` with variant `name`'s `config` (the case's seed and
+    /// sensor) and counts the result: its time, and its error or failure
+    /// (an error above 3 degrees, or a failure, said on stderr).
+    fn add(&mut self, name: &str, case: &Case, config: &EstimatorConfig) {
+        let config = EstimatorConfig {
+            seed: case.seed,
+            ..config.clone()
+        }
+        .for_sensor(&case.frame.sensor);
+        let mut est = Estimator::new(config);
+        let e = est.estimate_frame(
+            &case.frame.view(),
+            FrameInfo {
+                index: 0,
+                stamp_ns: 0,
+            },
+        );
+        self.ms.push(e.timings.total_ms);
+        if e.status == EstimateStatus::Ok {
+            let error = (e.slope_deg.abs() - case.truth_deg).abs();
+            self.errors.push(error);
+            if error > 3.0 {
+                eprintln!(
+                    "  {name}: {} seed {}: {:.2}",
+                    case.name, case.seed, e.slope_deg
+                );
+            }
+        } else {
+            self.failed += 1;
+            eprintln!(
+                "  {name}: {} seed {}: {}",
+                case.name,
+                case.seed,
+                e.status.name()
+            );
+        }
+    }
 }
 
 fn main() {
@@ -280,63 +318,10 @@ fn main() {
         .filter(|(name, _)| name.contains(&only))
         .collect();
     eprintln!("{} variants x {} frames", variants.len(), cases.len());
-    let mut rows = Vec::new();
-    for (name, config) in &variants {
-        let (mut sim, mut real) = (Tally::default(), Tally::default());
-        for case in &cases {
-            let config = EstimatorConfig {
-                seed: case.seed,
-                ..config.clone()
-            }
-            .for_sensor(&case.frame.sensor);
-            let mut est = Estimator::new(config);
-            let e = est.estimate_frame(
-                &case.frame.view(),
-                FrameInfo {
-                    index: 0,
-                    stamp_ns: 0,
-                },
-            );
-            let tally = if case.real { &mut real } else { &mut sim };
-            tally.ms.push(e.timings.total_ms);
-            if e.status == EstimateStatus::Ok {
-                let error = (e.slope_deg.abs() - case.truth_deg).abs();
-                tally.errors.push(error);
-                if error > 3.0 {
-                    eprintln!(
-                        "  {name}: {} seed {}: {:.2}",
-                        case.name, case.seed, e.slope_deg
-                    );
-                }
-            } else {
-                tally.failed += 1;
-                eprintln!(
-                    "  {name}: {} seed {}: {}",
-                    case.name,
-                    case.seed,
-                    e.status.name()
-                );
-            }
-        }
-        eprintln!(
-            "{name}: sim {:.3}/{:.3}, real {:.3}/{:.3}",
-            sim.mean(),
-            sim.worst(),
-            real.mean(),
-            real.worst()
-        );
-        rows.push(format!(
-            "| {name} | {:.2} | {:.2} | {} | {:.0} | {:.2} | {:.2} | {} | {:.0} |",
-            sim.mean(),
-            sim.worst(),
-            sim.failed,
-            sim.median_ms(),
-            real.mean(),
-            real.worst(),
-            real.failed,
-            real.median_ms(),
-        ));
-    }
+    let rows: Vec<String> = variants
+        .iter()
+        .map(|(name, config)| run_variant(name, config, &cases))
+        .collect();
     println!(
         "| variant | simulated mean | worst | failed | ms | real mean | worst | failed | ms |"
     );
@@ -344,4 +329,32 @@ fn main() {
     for row in rows {
         println!("{row}");
     }
+}
+
+/// Runs variant `name` on every case (reporting its misses and failures on
+/// stderr); returns its table row.
+fn run_variant(name: &str, config: &EstimatorConfig, cases: &[Case]) -> String {
+    let (mut sim, mut real) = (Tally::default(), Tally::default());
+    for case in cases {
+        let tally = if case.real { &mut real } else { &mut sim };
+        tally.add(name, case, config);
+    }
+    eprintln!(
+        "{name}: sim {:.3}/{:.3}, real {:.3}/{:.3}",
+        sim.mean(),
+        sim.worst(),
+        real.mean(),
+        real.worst()
+    );
+    format!(
+        "| {name} | {:.2} | {:.2} | {} | {:.0} | {:.2} | {:.2} | {} | {:.0} |",
+        sim.mean(),
+        sim.worst(),
+        sim.failed,
+        sim.median_ms(),
+        real.mean(),
+        real.worst(),
+        real.failed,
+        real.median_ms(),
+    )
 }

@@ -15,11 +15,24 @@ use slope_pipeline::cloud::angle_between_deg;
 use slope_pipeline::cosine_kmeans::CosineKmeans;
 use slope_pipeline::normals::NormalEstimator;
 use slope_pipeline::pass_through::PassThrough;
-use slope_pipeline::ransac_planes::PlaneSegmenter;
-use slope_pipeline::ransac_planes::Threshold;
+use slope_pipeline::ransac_planes::{PlaneSegmenter, SegmentedPlane, Threshold};
 use slope_pipeline::selection::{select_planes, Ground, PlaneSummary};
 use slope_pipeline::statistical_outlier::StatisticalOutlierFilter;
-use slope_pipeline::EstimatorConfig;
+use slope_pipeline::{CloudView, EstimatorConfig};
+
+/// The colours of the label image, plane k in colour k % 10.
+const PALETTE: [[u8; 3]; 10] = [
+    [230, 25, 75],
+    [60, 180, 75],
+    [255, 225, 25],
+    [0, 130, 200],
+    [245, 130, 48],
+    [145, 30, 180],
+    [70, 240, 240],
+    [240, 50, 230],
+    [210, 245, 60],
+    [250, 190, 212],
+];
 
 fn main() {
     let mut args = std::env::args().skip(1);
@@ -33,29 +46,57 @@ fn main() {
         Err(_) => EstimatorConfig::default(),
     }
     .for_sensor(rec.sensor());
-    let noise = config.selection.noise_model.unwrap_or_default();
+    let planes = segment_planes(&view, &config);
+    let up = view.mount.up_vector().map(Vector3::from);
+    let summaries = print_planes(&view, &planes, &config, up);
+    write_label_image(&dir, &view, &planes);
+    let sel = select_planes(&summaries, up, Some(view.mount.height_m), &config.selection);
+    println!("selection: {sel:?}");
+    let Ok(sel) = sel else { return };
+    let mut chosen = vec![("inclined", sel.inclined)];
+    if let Ground::Planes(g) = &sel.ground {
+        chosen.push(("ground", g[0]));
+    }
+    let means: Vec<_> = chosen
+        .into_iter()
+        .map(|(name, idx)| print_plane_normals(name, &view, &planes[idx], &config))
+        .collect();
+    if means.len() == 2 {
+        println!(
+            "angle of kept means {:.3}, of TLS planes {:.3}",
+            angle_between_deg(&means[0].0, &means[1].0),
+            angle_between_deg(&means[0].1, &means[1].1)
+        );
+    }
+}
+
+/// Runs the outlier filter (printing its statistics) and RANSAC; returns
+/// the planes found.
+fn segment_planes(view: &CloudView<'_>, config: &EstimatorConfig) -> Vec<SegmentedPlane> {
     let mut keep = Vec::new();
-    let stats = StatisticalOutlierFilter::new().filter(&view, &config.outlier, &mut keep);
+    let stats = StatisticalOutlierFilter::new().filter(view, &config.outlier, &mut keep);
     println!("outlier: {stats:?}");
     let mut seg = PlaneSegmenter::new();
     let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
-    let planes = seg.segment(&view, &keep, &config.ransac, &mut rng).to_vec();
-    let up = view.mount.up_vector().map(Vector3::from);
-    let w = view.width;
+    seg.segment(view, &keep, &config.ransac, &mut rng).to_vec()
+}
+
+/// Prints one line per plane (fit, quality, centroid, angle to `up`, pixel
+/// bounding box); returns their summaries.
+fn print_planes(
+    view: &CloudView<'_>,
+    planes: &[SegmentedPlane],
+    config: &EstimatorConfig,
+    up: Option<Vector3<f64>>,
+) -> Vec<PlaneSummary> {
+    let noise = config.selection.noise_model.unwrap_or_default();
     let threshold = Threshold::of(&config.ransac);
     let summaries: Vec<PlaneSummary> = planes
         .iter()
-        .map(|p| PlaneSummary::of(&view, p, &threshold, noise))
+        .map(|p| PlaneSummary::of(view, p, &threshold, noise))
         .collect();
     for (i, s) in summaries.iter().enumerate() {
-        let (u0, v0, u1, v1) =
-            planes[i]
-                .inliers
-                .iter()
-                .fold((usize::MAX, usize::MAX, 0, 0), |b, &p| {
-                    let (u, v) = (p as usize % w, p as usize / w);
-                    (b.0.min(u), b.1.min(v), b.2.max(u), b.3.max(v))
-                });
+        let (u0, v0, u1, v1) = pixel_bbox(&planes[i], view.width);
         let q = &s.quality;
         println!(
             "plane {i}: n [{:+.4} {:+.4} {:+.4}] d {:.3} inliers {} rms {:.4} rel {:.2} noise {:.1} area {:.2} border {:.2} centroid [{:.2} {:.2} {:.2}] up-angle {:.2} bbox u {u0}..{u1} v {v0}..{v1}",
@@ -64,19 +105,24 @@ fn main() {
             up.map_or(f64::NAN, |u| angle_between_deg(&s.plane.normal, &u))
         );
     }
-    // Label image: depth in grey, planes in colour.
-    let palette: [[u8; 3]; 10] = [
-        [230, 25, 75],
-        [60, 180, 75],
-        [255, 225, 25],
-        [0, 130, 200],
-        [245, 130, 48],
-        [145, 30, 180],
-        [70, 240, 240],
-        [240, 50, 230],
-        [210, 245, 60],
-        [250, 190, 212],
-    ];
+    summaries
+}
+
+/// The pixel bounding box of a plane's inliers: (u min, v min, u max, v max).
+fn pixel_bbox(plane: &SegmentedPlane, w: usize) -> (usize, usize, usize, usize) {
+    plane
+        .inliers
+        .iter()
+        .fold((usize::MAX, usize::MAX, 0, 0), |b, &p| {
+            let (u, v) = (p as usize % w, p as usize / w);
+            (b.0.min(u), b.1.min(v), b.2.max(u), b.3.max(v))
+        })
+}
+
+/// Writes the label image (depth in grey, planes in colour) to
+/// `$TMPDIR/labels_<recording name>.png` and says where.
+fn write_label_image(dir: &str, view: &CloudView<'_>, planes: &[SegmentedPlane]) {
+    let w = view.width;
     let mut rgb = vec![0u8; w * view.height * 3];
     for (i, p) in view.points.iter().enumerate() {
         if p.z_m.is_finite() {
@@ -87,10 +133,10 @@ fn main() {
     for (k, p) in planes.iter().enumerate() {
         for &i in &p.inliers {
             let i = i as usize;
-            rgb[3 * i..3 * i + 3].copy_from_slice(&palette[k % 10]);
+            rgb[3 * i..3 * i + 3].copy_from_slice(&PALETTE[k % 10]);
         }
     }
-    let name = std::path::Path::new(&dir)
+    let name = std::path::Path::new(dir)
         .file_name()
         .map_or_else(|| "frame".into(), |n| n.to_string_lossy().into_owned());
     let out = std::env::temp_dir().join(format!("labels_{name}.png"));
@@ -103,71 +149,72 @@ fn main() {
         .write_image_data(&rgb)
         .expect("png");
     println!("labels in {} (plane k = palette k: red, green, yellow, blue, orange, purple, cyan, magenta, lime, pink)", out.display());
-    let sel = select_planes(&summaries, up, Some(view.mount.height_m), &config.selection);
-    println!("selection: {sel:?}");
-    let Ok(sel) = sel else { return };
-    let mut chosen = vec![("inclined", sel.inclined)];
-    if let Ground::Planes(g) = &sel.ground {
-        chosen.push(("ground", g[0]));
-    }
-    let mut means = Vec::new();
-    for (name, idx) in chosen {
-        let mut pt = PassThrough::new();
-        let (members, range) = pt.filter(
-            view.points,
-            &planes[idx].inliers,
-            config.pass_through.max_points,
-        );
-        let members = members.to_vec();
-        let mut ne = NormalEstimator::new();
-        let (normals, nstats) = ne.estimate_with_support(
-            &view,
-            &members,
-            &planes[idx].inliers,
-            &config.normals.for_plane_noise(planes[idx].rms_m),
-            &Vector3::zeros(),
-        );
-        let normals = normals.to_vec();
-        let mut km = CosineKmeans::new();
-        let c = km
-            .cluster(
-                &normals,
-                config.kmeans.clusters,
-                config.kmeans.max_iterations,
-                config.kmeans.merge_spread_ratio,
-            )
-            .expect("clusters");
-        let kept: Vector3<f64> = km.kept_members(&c).sum();
-        let all: Vector3<f64> = normals.iter().filter(|n| n.x.is_finite()).sum();
-        println!(
-            "{name}: range {range:?}\n   normals {nstats:?} clusters {:?} kept {:?} spread {:.2} centre angles {:?}\n   kept-mean vs tls {:.3} deg, all-mean vs tls {:.3}",
-            c.counts,
-            c.kept,
-            c.spread_deg,
-            c.centres.iter().map(|x| format!("{:.2}", angle_between_deg(x, &c.centres[c.dominant]))).collect::<Vec<_>>(),
-            angle_between_deg(&kept, &planes[idx].plane.normal),
-            angle_between_deg(&all, &planes[idx].plane.normal),
-        );
-        let mut bm = slope_pipeline::plane_fit::Moments::new();
-        for &i in &members {
-            if let Some(p) = view.point(i as usize) {
-                bm.add(&p);
-            }
+}
+
+/// Runs pass-through, normals and k-means on one chosen plane and prints
+/// what they did and how the kept normals' mean compares with TLS fits;
+/// returns the kept mean and the plane's normal.
+fn print_plane_normals(
+    name: &str,
+    view: &CloudView<'_>,
+    plane: &SegmentedPlane,
+    config: &EstimatorConfig,
+) -> (Vector3<f64>, Vector3<f64>) {
+    let mut pt = PassThrough::new();
+    let (members, range) = pt.filter(view.points, &plane.inliers, config.pass_through.max_points);
+    let members = members.to_vec();
+    let mut ne = NormalEstimator::new();
+    let (normals, nstats) = ne.estimate_with_support(
+        view,
+        &members,
+        &plane.inliers,
+        &config.normals.for_plane_noise(plane.rms_m),
+        &Vector3::zeros(),
+    );
+    let normals = normals.to_vec();
+    let mut km = CosineKmeans::new();
+    let c = km
+        .cluster(
+            &normals,
+            config.kmeans.clusters,
+            config.kmeans.max_iterations,
+            config.kmeans.merge_spread_ratio,
+        )
+        .expect("clusters");
+    let kept: Vector3<f64> = km.kept_members(&c).sum();
+    let all: Vector3<f64> = normals.iter().filter(|n| n.x.is_finite()).sum();
+    println!(
+        "{name}: range {range:?}\n   normals {nstats:?} clusters {:?} kept {:?} spread {:.2} centre angles {:?}\n   kept-mean vs tls {:.3} deg, all-mean vs tls {:.3}",
+        c.counts,
+        c.kept,
+        c.spread_deg,
+        c.centres.iter().map(|x| format!("{:.2}", angle_between_deg(x, &c.centres[c.dominant]))).collect::<Vec<_>>(),
+        angle_between_deg(&kept, &plane.plane.normal),
+        angle_between_deg(&all, &plane.plane.normal),
+    );
+    print_kept_tls(view, &members, plane, &kept);
+    (kept, plane.plane.normal)
+}
+
+/// Prints how a TLS fit of the pass-through `members` compares with the
+/// plane's TLS fit and with the kept normals' mean.
+fn print_kept_tls(
+    view: &CloudView<'_>,
+    members: &[u32],
+    plane: &SegmentedPlane,
+    kept: &Vector3<f64>,
+) {
+    let mut bm = slope_pipeline::plane_fit::Moments::new();
+    for &i in members {
+        if let Some(p) = view.point(i as usize) {
+            bm.add(&p);
         }
-        if let Some(bp) = slope_pipeline::plane_fit::fit_tls(&bm) {
-            println!(
-                "   kept-tls vs plane-tls {:.3} deg, kept-mean vs kept-tls {:.3}",
-                angle_between_deg(&bp.normal, &planes[idx].plane.normal),
-                angle_between_deg(&kept, &bp.normal)
-            );
-        }
-        means.push((kept, planes[idx].plane.normal));
     }
-    if means.len() == 2 {
+    if let Some(bp) = slope_pipeline::plane_fit::fit_tls(&bm) {
         println!(
-            "angle of kept means {:.3}, of TLS planes {:.3}",
-            angle_between_deg(&means[0].0, &means[1].0),
-            angle_between_deg(&means[0].1, &means[1].1)
+            "   kept-tls vs plane-tls {:.3} deg, kept-mean vs kept-tls {:.3}",
+            angle_between_deg(&bp.normal, &plane.plane.normal),
+            angle_between_deg(kept, &bp.normal)
         );
     }
 }

@@ -12,23 +12,12 @@ mod common;
 
 use std::path::Path;
 
-use slope_pipeline::{Estimator, EstimatorConfig, SlopeMethod};
+use slope_pipeline::{Estimate, Estimator, EstimatorConfig, SlopeMethod};
 
 fn main() {
     let dirs: Vec<String> = std::env::args().skip(1).collect();
-    let methods: Vec<SlopeMethod> = match std::env::var("METHODS") {
-        Ok(m) => m
-            .split(',')
-            .filter_map(slope_pipeline::parse_method)
-            .collect(),
-        Err(_) => SlopeMethod::ALL.to_vec(),
-    };
-    let repeat: usize = std::env::var("REPEAT")
-        .ok()
-        .and_then(|r| r.parse().ok())
-        .unwrap_or(1)
-        .max(1);
-    for method in methods {
+    let repeat = repeat_from_env();
+    for method in methods_from_env() {
         let base = match std::env::var("CONFIG") {
             Ok(text) => EstimatorConfig::from_toml_str(&text).expect("CONFIG"),
             Err(_) => EstimatorConfig::default(),
@@ -46,65 +35,123 @@ fn main() {
                 ..base.clone()
             };
             let mut est = Estimator::new(config.for_sensor(rec.sensor()));
-            let mut slopes = Vec::new();
-            let mut stds = Vec::new();
-            let mut stages: Vec<(&'static str, f64)> = Vec::new();
-            let mut total = 0.0;
-            let mut statuses = Vec::new();
-            let n = rec.len();
-            for k in 0..n {
-                let frame = rec.frame(k).expect("frame");
-                // REPEAT=n: run each frame n times (warm buffers) and take
-                // each timing's median; the estimate is the same every time.
-                let runs: Vec<_> = (0..repeat).map(|_| est.estimate(&frame.view())).collect();
-                let e = &runs[0];
-                statuses.push(e.status.name());
-                if e.slope_deg.is_finite() {
-                    slopes.push(e.slope_deg);
-                    stds.push(e.slope_std_deg);
-                }
-                let median_ms = |pick: &dyn Fn(&slope_pipeline::Estimate) -> f64| {
-                    let mut v: Vec<f64> = runs.iter().map(pick).collect();
-                    v.sort_by(f64::total_cmp);
-                    v[v.len() / 2]
-                };
-                total += median_ms(&|r| r.timings.total_ms);
-                for (name, _) in &e.timings.stages {
-                    let ms = median_ms(&|r| {
-                        r.timings
-                            .stages
-                            .iter()
-                            .find(|(m, _)| m == name)
-                            .map_or(0.0, |(_, t)| *t)
-                    });
-                    match stages.iter_mut().find(|(m, _)| m == name) {
-                        Some((_, t)) => *t += ms,
-                        None => stages.push((name, ms)),
-                    }
-                }
-            }
-            slopes.sort_by(f64::total_cmp);
-            let median = slopes.get(slopes.len() / 2).copied().unwrap_or(f64::NAN);
-            stds.sort_by(f64::total_cmp);
-            let median_std = stds.get(stds.len() / 2).copied().unwrap_or(f64::NAN);
-            let truth = rec.truth_slope_deg.unwrap_or(f64::NAN);
-            let ok = statuses.iter().filter(|s| **s == "ok").count();
-            let st: Vec<String> = stages
-                .iter()
-                .map(|(s, ms)| format!("{s} {:.1}", ms / n as f64))
-                .collect();
-            println!(
-                "{:<14} {:<40} median {:8.3} |err| {:6.3} ok {ok}/{n} min {:.2} max {:.2} median std {:.2}  {:.1} ms [{}]",
-                method.name(),
-                dir,
-                median,
-                (median.abs() - truth).abs(),
-                slopes.first().copied().unwrap_or(f64::NAN),
-                slopes.last().copied().unwrap_or(f64::NAN),
-                median_std,
-                total / n as f64,
-                st.join(", ")
-            );
+            let run = run_recording(&mut est, &rec, repeat);
+            print_row(method, dir, rec.truth_slope_deg, &run);
         }
     }
+}
+
+/// `METHODS=paper,tls`: the methods to run (unknown names skipped); all
+/// of them without the variable.
+fn methods_from_env() -> Vec<SlopeMethod> {
+    match std::env::var("METHODS") {
+        Ok(m) => m
+            .split(',')
+            .filter_map(slope_pipeline::parse_method)
+            .collect(),
+        Err(_) => SlopeMethod::ALL.to_vec(),
+    }
+}
+
+/// `REPEAT=n`: how many times each frame runs (at least once).
+fn repeat_from_env() -> usize {
+    std::env::var("REPEAT")
+        .ok()
+        .and_then(|r| r.parse().ok())
+        .unwrap_or(1)
+        .max(1)
+}
+
+/// What one method did over one recording.
+#[derive(Default)]
+struct RecordingRun {
+    /// The finite slopes, in frame order (sorted by [`print_row`]).
+    slopes: Vec<f64>,
+    /// The spread of each finite slope.
+    stds: Vec<f64>,
+    /// Per stage, in first-seen order, the sum over frames of its median ms.
+    stages: Vec<(&'static str, f64)>,
+    /// The sum over frames of the median total ms.
+    total_ms: f64,
+    /// Each frame's status name.
+    statuses: Vec<&'static str>,
+    frames: usize,
+}
+
+/// Runs `est` over every frame of `rec`, each frame `repeat` times.
+fn run_recording(est: &mut Estimator, rec: &common::Recording, repeat: usize) -> RecordingRun {
+    let mut run = RecordingRun {
+        frames: rec.len(),
+        ..RecordingRun::default()
+    };
+    for k in 0..run.frames {
+        let frame = rec.frame(k).expect("frame");
+        // REPEAT=n: run each frame n times (warm buffers) and take
+        // each timing's median; the estimate is the same every time.
+        let runs: Vec<_> = (0..repeat).map(|_| est.estimate(&frame.view())).collect();
+        let e = &runs[0];
+        run.statuses.push(e.status.name());
+        if e.slope_deg.is_finite() {
+            run.slopes.push(e.slope_deg);
+            run.stds.push(e.slope_std_deg);
+        }
+        add_median_timings(&mut run, &runs);
+    }
+    run
+}
+
+/// The median over `runs` of `pick`.
+fn median_ms(runs: &[Estimate], pick: &dyn Fn(&Estimate) -> f64) -> f64 {
+    let mut v: Vec<f64> = runs.iter().map(pick).collect();
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// Adds one frame's median total and per-stage timings over its `runs`.
+fn add_median_timings(run: &mut RecordingRun, runs: &[Estimate]) {
+    run.total_ms += median_ms(runs, &|r| r.timings.total_ms);
+    for (name, _) in &runs[0].timings.stages {
+        let ms = median_ms(runs, &|r| {
+            r.timings
+                .stages
+                .iter()
+                .find(|(m, _)| m == name)
+                .map_or(0.0, |(_, t)| *t)
+        });
+        match run.stages.iter_mut().find(|(m, _)| m == name) {
+            Some((_, t)) => *t += ms,
+            None => run.stages.push((name, ms)),
+        }
+    }
+}
+
+/// Prints one line: median slope, its error against `truth`, the ok count,
+/// the slope range, the median spread and the mean timings.
+fn print_row(method: SlopeMethod, dir: &str, truth: Option<f64>, run: &RecordingRun) {
+    let mut slopes = run.slopes.clone();
+    slopes.sort_by(f64::total_cmp);
+    let median = slopes.get(slopes.len() / 2).copied().unwrap_or(f64::NAN);
+    let mut stds = run.stds.clone();
+    stds.sort_by(f64::total_cmp);
+    let median_std = stds.get(stds.len() / 2).copied().unwrap_or(f64::NAN);
+    let truth = truth.unwrap_or(f64::NAN);
+    let ok = run.statuses.iter().filter(|s| **s == "ok").count();
+    let n = run.frames;
+    let st: Vec<String> = run
+        .stages
+        .iter()
+        .map(|(s, ms)| format!("{s} {:.1}", ms / n as f64))
+        .collect();
+    println!(
+        "{:<14} {:<40} median {:8.3} |err| {:6.3} ok {ok}/{n} min {:.2} max {:.2} median std {:.2}  {:.1} ms [{}]",
+        method.name(),
+        dir,
+        median,
+        (median.abs() - truth).abs(),
+        slopes.first().copied().unwrap_or(f64::NAN),
+        slopes.last().copied().unwrap_or(f64::NAN),
+        median_std,
+        run.total_ms / n as f64,
+        st.join(", ")
+    );
 }

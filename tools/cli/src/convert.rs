@@ -140,13 +140,30 @@ pub fn run(args: &ConvertArgs, stop: &StopFlag) -> anyhow::Result<ConvertStats> 
     let config =
         load_config(args.config.as_ref(), args.method)?.for_sensor(&recording.meta().sensor);
     let mut estimator = (!args.no_estimates).then(|| Estimator::new(config));
-    let meta = recording.meta();
-    let (width, height) = (meta.depth.width, meta.depth.height);
-    let unit_m = meta.depth.unit_m;
+    let mut exporter =
+        McapExporter::create_replacing(args.output(), args.mcap_compression, recording.meta())?;
+    let stats = convert_frames(args, stop, &recording, estimator.as_mut(), &mut exporter)?;
+    if stats.frames == 0 {
+        return refuse_empty(args, stats);
+    }
+    exporter.finish()?;
+    log_summary(args, &stats);
+    Ok(stats)
+}
+
+/// Converts the frames of `recording` (at most `--max-frames`) into
+/// `exporter`, until `stop` is set; counts what was written and skipped.
+fn convert_frames(
+    args: &ConvertArgs,
+    stop: &StopFlag,
+    recording: &Recording,
+    mut estimator: Option<&mut Estimator>,
+    exporter: &mut McapExporter,
+) -> anyhow::Result<ConvertStats> {
+    let depth_meta = &recording.meta().depth;
     let projector = recording.projector();
     let mut depth = DepthImage::default();
     let mut points = vec![CloudPoint::INVALID; projector.len()];
-    let mut exporter = McapExporter::create_replacing(args.output(), args.mcap_compression, meta)?;
     let limit = args.max_frames.map_or(usize::MAX, |m| m as usize);
     let total = recording.frames().len().min(limit);
     let mut stats = ConvertStats::default();
@@ -163,39 +180,21 @@ pub fn run(args: &ConvertArgs, stop: &StopFlag) -> anyhow::Result<ConvertStats> 
             stats.bad_frames += 1;
             continue;
         }
-        let color = read_color(&recording, frame, &mut stats);
+        let color = read_color(recording, frame, &mut stats);
         projector.project_into(
             &depth.data,
             color.as_ref().map(|c| &c.data[..]),
             &mut points,
         );
-        let message = estimator.as_mut().map(|estimator| {
-            let view = CloudView {
-                points: &points,
-                width: width as usize,
-                height: height as usize,
-                intrinsics: recording.intrinsics(),
-                mount: recording.mount(),
-            };
-            let info = FrameInfo {
-                index: frame.index,
-                stamp_ns: frame.timestamp_ns,
-            };
-            let estimate = estimator.estimate_frame(&view, info);
-            let mut message = SlopeEstimate {
-                frame_index: frame.index,
-                capture_stamp_ns: frame.timestamp_ns,
-                ..SlopeEstimate::default()
-            };
-            estimate.write_message(&mut message);
-            message
-        });
+        let message = estimator
+            .as_deref_mut()
+            .map(|estimator| estimate_message(estimator, recording, &points, frame));
         exporter.write(&McapFrame {
             stamp_ns: frame.timestamp_ns,
-            width,
-            height,
+            width: depth_meta.width,
+            height: depth_meta.height,
             depth: &depth.data,
-            depth_unit_m: unit_m,
+            depth_unit_m: depth_meta.unit_m,
             points: &points,
             estimate: message.as_ref(),
         })?;
@@ -203,22 +202,58 @@ pub fn run(args: &ConvertArgs, stop: &StopFlag) -> anyhow::Result<ConvertStats> 
         stats.estimates += u64::from(message.is_some());
         tracing::debug!(frame = frame.index, "frame converted");
     }
-    if stats.frames == 0 {
-        // Dropped unfinished, the exporter removes its temporary file: an
-        // earlier output stays as it was.
-        let output = args.output().display();
-        if stats.interrupted.is_some() {
-            tracing::warn!("stopped before the first frame; {output} left as it was");
-            return Ok(stats);
-        }
-        bail!(
-            "no frame of {} could be read ({} bad frame(s), see the warnings above); {output} \
-             was not written",
-            args.recording.display(),
-            stats.bad_frames
-        );
+    Ok(stats)
+}
+
+/// The estimate of one projected frame, as the message `slope-echo` shows.
+fn estimate_message(
+    estimator: &mut Estimator,
+    recording: &Recording,
+    points: &[CloudPoint],
+    frame: &FrameEntry,
+) -> SlopeEstimate {
+    let depth_meta = &recording.meta().depth;
+    let view = CloudView {
+        points,
+        width: depth_meta.width as usize,
+        height: depth_meta.height as usize,
+        intrinsics: recording.intrinsics(),
+        mount: recording.mount(),
+    };
+    let info = FrameInfo {
+        index: frame.index,
+        stamp_ns: frame.timestamp_ns,
+    };
+    let estimate = estimator.estimate_frame(&view, info);
+    let mut message = SlopeEstimate {
+        frame_index: frame.index,
+        capture_stamp_ns: frame.timestamp_ns,
+        ..SlopeEstimate::default()
+    };
+    estimate.write_message(&mut message);
+    message
+}
+
+/// The end of a run that converted no frame: Ok after an interruption, an
+/// error otherwise. The exporter, dropped unfinished, removes its temporary
+/// file: an earlier output stays as it was.
+fn refuse_empty(args: &ConvertArgs, stats: ConvertStats) -> anyhow::Result<ConvertStats> {
+    let output = args.output().display();
+    if stats.interrupted.is_some() {
+        tracing::warn!("stopped before the first frame; {output} left as it was");
+        return Ok(stats);
     }
-    exporter.finish()?;
+    bail!(
+        "no frame of {} could be read ({} bad frame(s), see the warnings above); {output} \
+         was not written",
+        args.recording.display(),
+        stats.bad_frames
+    );
+}
+
+/// Logs what a finished run wrote: the colourless frames, an interruption,
+/// and the counts.
+fn log_summary(args: &ConvertArgs, stats: &ConvertStats) {
     if stats.bad_colors > 0 {
         tracing::warn!(
             "{} frame(s) converted without colour: their colour image could not be read",
@@ -239,7 +274,6 @@ pub fn run(args: &ConvertArgs, stop: &StopFlag) -> anyhow::Result<ConvertStats> 
         bad_colors = stats.bad_colors,
         "converted"
     );
-    Ok(stats)
 }
 
 /// The colour image of `frame`, registered to its depth image (the

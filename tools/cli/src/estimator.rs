@@ -154,6 +154,8 @@ pub fn run(args: &EstimatorArgs, stop: &StopFlag) -> anyhow::Result<EstimatorSta
     result
 }
 
+/// Loads the settings, opens the services and runs the estimator until
+/// stopped; the body of [`run`].
 fn estimate(
     args: &EstimatorArgs,
     stop: &StopFlag,
@@ -161,12 +163,7 @@ fn estimate(
 ) -> anyhow::Result<EstimatorStats> {
     let file = effective_config(args)?;
     if args.print_config {
-        print!(
-            "{}",
-            file.to_toml()
-                .context("cannot write the settings as TOML")?
-        );
-        return Ok(EstimatorStats::default());
+        return print_config(&file);
     }
     let config = file.estimator;
     let health_interval_s = file.health.interval_s;
@@ -185,31 +182,48 @@ fn estimate(
         estimates = %names.estimate(),
         "estimator ready"
     );
-    let mut worker = Worker {
-        estimator: Estimator::new(config.clone().for_sensor("")),
-        config,
-        sensor: [0; SENSOR_NAME_LEN],
-        subscriber: &subscriber,
-        publisher: &publisher,
-        stats: EstimatorStats::default(),
-        last_frame: None,
-        last_slope_deg: None,
-        max_frames: args.max_frames,
-        health: HealthReporter::new(
-            HealthComponent::Estimator,
-            health_publisher,
-            health_interval_s,
-        ),
-        status: StatusRate::new(Instant::now()),
-    };
+    let health = HealthReporter::new(
+        HealthComponent::Estimator,
+        health_publisher,
+        health_interval_s,
+    );
+    let mut worker = Worker::new(config, &subscriber, &publisher, args.max_frames, health);
+    serve(&mut worker, stop, manager)?;
+    tracing::info!(
+        processed = worker.stats.processed,
+        dropped = worker.stats.dropped,
+        "estimator stopped"
+    );
+    Ok(worker.stats.clone())
+}
+
+/// `--print-config`: prints every setting in effect as TOML, estimates
+/// nothing.
+fn print_config(file: &SlopeFile) -> anyhow::Result<EstimatorStats> {
+    print!(
+        "{}",
+        file.to_toml()
+            .context("cannot write the settings as TOML")?
+    );
+    Ok(EstimatorStats::default())
+}
+
+/// Tells the service manager the estimator is ready, then handles clouds
+/// as they arrive until `stop` is set or `--max-frames` is reached, noting
+/// silences, status lines and health reports on the way.
+fn serve(
+    worker: &mut Worker<'_>,
+    stop: &StopFlag,
+    manager: &mut ServiceManager,
+) -> anyhow::Result<()> {
     let mut silence = SilenceNote::new(
         "cloud",
-        subscriber.service_name(),
+        worker.subscriber.service_name(),
         "slope-capture or slope-replay",
     );
     manager.ready("waiting for clouds");
     let started = Instant::now();
-    let result = wait_loop(subscriber.listener(), stop, || {
+    wait_loop(worker.subscriber.listener(), stop, || {
         let processed = worker.stats.processed;
         worker.on_cloud_event()?;
         if worker.stats.processed > processed {
@@ -220,14 +234,7 @@ fn estimate(
         manager.tick(|| worker.status_line(started.elapsed()));
         worker.health.tick();
         Ok(!worker.done())
-    });
-    result?;
-    tracing::info!(
-        processed = worker.stats.processed,
-        dropped = worker.stats.dropped,
-        "estimator stopped"
-    );
-    Ok(worker.stats.clone())
+    })
 }
 
 /// Frames the queue overwrote before we saw them, from the gap in the
@@ -331,6 +338,32 @@ struct Worker<'a> {
     max_frames: Option<u64>,
     health: HealthReporter,
     status: StatusRate,
+}
+
+impl<'a> Worker<'a> {
+    /// A worker that has processed nothing yet, its estimator built for a
+    /// cloud without a sensor name until the first cloud says otherwise.
+    fn new(
+        config: EstimatorConfig,
+        subscriber: &'a CloudSubscriber,
+        publisher: &'a EstimatePublisher,
+        max_frames: Option<u64>,
+        health: HealthReporter,
+    ) -> Self {
+        Self {
+            estimator: Estimator::new(config.clone().for_sensor("")),
+            config,
+            sensor: [0; SENSOR_NAME_LEN],
+            subscriber,
+            publisher,
+            stats: EstimatorStats::default(),
+            last_frame: None,
+            last_slope_deg: None,
+            max_frames,
+            health,
+            status: StatusRate::new(Instant::now()),
+        }
+    }
 }
 
 impl Worker<'_> {

@@ -15,7 +15,8 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 use slope_sensor::recording::{
-    DepthInfo, MountInfo, PngCompression, RecordingMeta, RecordingWriter, TruthInfo,
+    ColorImage, DepthImage, DepthInfo, MountInfo, PngCompression, RecordingError, RecordingMeta,
+    RecordingWriter, TruthInfo,
 };
 
 use crate::camera::{Camera, CameraPose};
@@ -172,8 +173,39 @@ pub fn write_recording_with(
     seed: u64,
     out_dir: &Path,
     options: WriteOptions,
-    mut on_frame: impl FnMut(u64) -> ControlFlow<()>,
+    on_frame: impl FnMut(u64) -> ControlFlow<()>,
 ) -> Result<RecordingSummary, WriteError> {
+    let world = prepare_world(scene, model, frames)?;
+    let meta = recording_meta(scene);
+    let mut writer =
+        RecordingWriter::create(out_dir, &meta, false).map_err(recording_error(out_dir))?;
+    writer.set_compression(options.compression);
+    tracing::info!(
+        dir = %out_dir.display(),
+        frames,
+        seed,
+        clean = model.is_clean(),
+        truth_slope_deg = ?meta.truth.slope_deg,
+        "rendering recording"
+    );
+
+    let started = Instant::now();
+    let renderer = FrameRenderer {
+        scene,
+        model,
+        world: &world,
+        seed,
+        color: options.color,
+    };
+    let counts = write_frames(&renderer, frames, &mut writer, out_dir, on_frame)?;
+    let dir = writer.finish().map_err(recording_error(out_dir))?;
+    Ok(summarise(scene, dir, frames, counts, started))
+}
+
+/// Checks the scene, the sensor model and the frame count, and that the
+/// camera's nominal path stays outside every object; returns the world to
+/// render.
+fn prepare_world(scene: &Scene, model: &SensorModel, frames: u64) -> Result<World, WriteError> {
     scene.validate()?;
     model.validate()?;
     if frames == 0 {
@@ -198,55 +230,96 @@ pub fn write_recording_with(
             });
         }
     }
+    Ok(world)
+}
 
-    let recording_error = |source| WriteError::Recording {
-        dir: out_dir.to_path_buf(),
+/// [`WriteError::Recording`] for the recording in `dir`.
+fn recording_error(dir: &Path) -> impl Fn(RecordingError) -> WriteError + '_ {
+    move |source| WriteError::Recording {
+        dir: dir.to_path_buf(),
         source,
-    };
-    let meta = recording_meta(scene);
-    let mut writer = RecordingWriter::create(out_dir, &meta, false).map_err(recording_error)?;
-    writer.set_compression(options.compression);
-    tracing::info!(
-        dir = %out_dir.display(),
-        frames,
-        seed,
-        clean = model.is_clean(),
-        truth_slope_deg = ?meta.truth.slope_deg,
-        "rendering recording"
-    );
+    }
+}
 
-    let started = Instant::now();
-    let mut valid = 0u64;
-    let mut written = 0u64;
-    for index in 0..frames {
-        let mut rng = frame_rng(seed, index);
-        let camera = frame_camera(scene, model, index, &mut rng);
-        if world.contains(&camera.pose.position) {
+/// What renders the frames of one recording.
+struct FrameRenderer<'a> {
+    scene: &'a Scene,
+    model: &'a SensorModel,
+    world: &'a World,
+    seed: u64,
+    /// Also shade a colour image.
+    color: bool,
+}
+
+impl FrameRenderer<'_> {
+    /// Frame `index`: its depth image and, if asked for, its colour image;
+    /// an error if the camera's jittered pose falls inside an object.
+    fn render(&self, index: u64) -> Result<(DepthImage, Option<ColorImage>), WriteError> {
+        let mut rng = frame_rng(self.seed, index);
+        let camera = frame_camera(self.scene, self.model, index, &mut rng);
+        if self.world.contains(&camera.pose.position) {
             return Err(WriteError::CameraInsideGeometry {
                 frame: index,
                 y_m: camera.pose.position.y,
             });
         }
-        let geometry = raycast(&world, &camera);
-        let depth = render_depth(&geometry, &world, model, &camera, &mut rng);
-        let color = options.color.then(|| shade(&geometry));
+        let geometry = raycast(self.world, &camera);
+        let depth = render_depth(&geometry, self.world, self.model, &camera, &mut rng);
+        let color = self.color.then(|| shade(&geometry));
+        Ok((depth, color))
+    }
+}
+
+/// Frames written and depth readings among them.
+#[derive(Debug, Clone, Copy)]
+struct FrameCounts {
+    written: u64,
+    valid_pixels: u64,
+}
+
+/// Renders and writes frames 0, 1, ... up to `frames`, calling
+/// `on_frame(index)` after each and stopping early when it breaks.
+fn write_frames(
+    renderer: &FrameRenderer<'_>,
+    frames: u64,
+    writer: &mut RecordingWriter,
+    out_dir: &Path,
+    mut on_frame: impl FnMut(u64) -> ControlFlow<()>,
+) -> Result<FrameCounts, WriteError> {
+    let mut counts = FrameCounts {
+        written: 0,
+        valid_pixels: 0,
+    };
+    for index in 0..frames {
+        let (depth, color) = renderer.render(index)?;
         let frame_valid = depth.data.iter().filter(|&&d| d != 0).count();
-        valid += frame_valid as u64;
+        counts.valid_pixels += frame_valid as u64;
         writer
             .write_frame(frame_timestamp_ns(index), &depth, color.as_ref(), None)
-            .map_err(recording_error)?;
+            .map_err(recording_error(out_dir))?;
         tracing::debug!(frame = index, valid_pixels = frame_valid, "frame written");
-        written += 1;
+        counts.written += 1;
         if on_frame(index).is_break() {
             break;
         }
     }
-    let dir = writer.finish().map_err(recording_error)?;
+    Ok(counts)
+}
 
+/// The summary of a written recording (logged): frames, the fraction of
+/// pixels with a depth reading, the time per frame since `started`.
+fn summarise(
+    scene: &Scene,
+    dir: PathBuf,
+    frames_asked: u64,
+    counts: FrameCounts,
+    started: Instant,
+) -> RecordingSummary {
+    let written = counts.written;
     // `written` is at least 1: the loop runs for frame 0 and counts it
     // before it can stop.
     let pixels = written as f64 * f64::from(scene.camera.width) * f64::from(scene.camera.height);
-    let valid_fraction = valid as f64 / pixels;
+    let valid_fraction = counts.valid_pixels as f64 / pixels;
     let elapsed = started.elapsed().as_secs_f64();
     tracing::info!(
         frames = written,
@@ -254,10 +327,10 @@ pub fn write_recording_with(
         seconds_per_frame = format!("{:.3}", elapsed / written as f64),
         "recording written"
     );
-    Ok(RecordingSummary {
+    RecordingSummary {
         dir,
         frames: written,
-        frames_asked: frames,
+        frames_asked,
         valid_fraction,
-    })
+    }
 }

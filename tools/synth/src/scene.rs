@@ -232,87 +232,17 @@ impl Scene {
 
     /// Checks every value; the error names the key.
     pub fn validate(&self) -> Result<(), SceneError> {
-        let c = &self.camera;
-        check(
-            c.width > 0 && c.height > 0,
-            "camera.width",
-            "image size must be > 0",
-        )?;
-        check(
-            c.width <= 4096 && c.height <= 4096,
-            "camera.width",
-            "image size must be <= 4096",
-        )?;
-        for (key, v) in [("camera.fx", c.fx), ("camera.fy", c.fy)] {
-            check(v.is_finite() && v > 0.0, key, "must be a positive number")?;
-        }
-        for (key, v) in [("camera.cx", c.cx), ("camera.cy", c.cy)] {
-            check(v.is_finite(), key, "must be a finite number")?;
-        }
-        let m = &self.mount;
-        MOUNT_HEIGHT.check(m.height_m)?;
-        MOUNT_PITCH.check(m.pitch_deg)?;
-        MOUNT_ROLL.check(m.roll_deg)?;
+        self.camera.validate()?;
+        self.mount.validate()?;
         MOTION_SPEED.check(self.motion.speed_mps)?;
-        if let Some(r) = &self.ramp {
-            check(
-                r.slope_deg.is_finite() && r.slope_deg > 0.0 && r.slope_deg <= 90.0,
-                "ramp.slope_deg",
-                "must lie in (0, 90]",
-            )?;
-            check(
-                !(r.direction == SlopeDirection::Descending && r.slope_deg >= 90.0),
-                "ramp.slope_deg",
-                "a descending slope must be below 90°",
-            )?;
-            RAMP_DISTANCE.check(r.distance_m)?;
-            RAMP_WIDTH.check(r.width_m)?;
-            RAMP_LENGTH.check(r.length_m)?;
-            RAMP_LANDING.check(r.landing_m)?;
-            RAMP_YAW.check(r.yaw_deg)?;
-            check(
-                r.offset_m.is_finite(),
-                "ramp.offset_m",
-                "must be a finite number",
-            )?;
+        if let Some(ramp) = &self.ramp {
+            ramp.validate()?;
         }
-        for (i, w) in self.walls.iter().enumerate() {
-            let key = |k: &str| format!("walls[{i}].{k}");
-            check((WALL_X.accepts)(w.x_m), &key("x_m"), WALL_X.reason)?;
-            check(
-                w.from_m.is_finite() && w.to_m.is_finite(),
-                &key("from_m"),
-                "must be finite",
-            )?;
-            check(
-                w.to_m > w.from_m,
-                &key("to_m"),
-                "must be greater than from_m",
-            )?;
-            check(
-                w.height_m.is_finite() && w.height_m > 0.0,
-                &key("height_m"),
-                "must be > 0",
-            )?;
-            check(
-                w.thickness_m.is_finite() && w.thickness_m > 0.0,
-                &key("thickness_m"),
-                "must be > 0",
-            )?;
+        for (i, wall) in self.walls.iter().enumerate() {
+            wall.validate(i)?;
         }
-        for (i, b) in self.boxes.iter().enumerate() {
-            let key = |k: &str| format!("boxes[{i}].{k}");
-            check(
-                b.x_m.is_finite() && b.y_m.is_finite(),
-                &key("x_m"),
-                "must be finite",
-            )?;
-            check(
-                b.size_m.iter().all(|s| s.is_finite() && *s > 0.0),
-                &key("size_m"),
-                "every size must be > 0",
-            )?;
-            check(b.yaw_deg.is_finite(), &key("yaw_deg"), "must be finite")?;
+        for (i, ground_box) in self.boxes.iter().enumerate() {
+            ground_box.validate(i)?;
         }
         for (i, table) in self.tables.iter().enumerate() {
             table.validate(i)?;
@@ -323,14 +253,126 @@ impl Scene {
         for (i, block) in self.soft_blocks.iter().enumerate() {
             block.validate(i)?;
         }
+        self.check_object_count()
+    }
+
+    /// The surfaces index their object in a `u16`: fewer than 65535
+    /// objects in all.
+    fn check_object_count(&self) -> Result<(), SceneError> {
         let objects =
             self.walls.len() + self.boxes.len() + self.tables.len() + self.soft_blocks.len();
         check(
             objects < usize::from(u16::MAX),
             "boxes",
             "too many objects (walls + boxes + tables + soft_blocks must be < 65535)",
+        )
+    }
+}
+
+impl CameraModel {
+    /// `[camera]`: an image size in (0, 4096], positive focal lengths, a
+    /// finite principal point.
+    fn validate(&self) -> Result<(), SceneError> {
+        check(
+            self.width > 0 && self.height > 0,
+            "camera.width",
+            "image size must be > 0",
         )?;
+        check(
+            self.width <= 4096 && self.height <= 4096,
+            "camera.width",
+            "image size must be <= 4096",
+        )?;
+        for (key, v) in [("camera.fx", self.fx), ("camera.fy", self.fy)] {
+            check(v.is_finite() && v > 0.0, key, "must be a positive number")?;
+        }
+        for (key, v) in [("camera.cx", self.cx), ("camera.cy", self.cy)] {
+            check(v.is_finite(), key, "must be a finite number")?;
+        }
         Ok(())
+    }
+}
+
+impl MountPose {
+    /// `[mount]`: height, pitch and roll within their rules.
+    fn validate(&self) -> Result<(), SceneError> {
+        MOUNT_HEIGHT.check(self.height_m)?;
+        MOUNT_PITCH.check(self.pitch_deg)?;
+        MOUNT_ROLL.check(self.roll_deg)
+    }
+}
+
+impl Ramp {
+    /// `[ramp]`: a slope in (0, 90] (below 90° descending), its distances,
+    /// sizes and yaw within their rules, a finite offset.
+    fn validate(&self) -> Result<(), SceneError> {
+        check(
+            self.slope_deg.is_finite() && self.slope_deg > 0.0 && self.slope_deg <= 90.0,
+            "ramp.slope_deg",
+            "must lie in (0, 90]",
+        )?;
+        check(
+            !(self.direction == SlopeDirection::Descending && self.slope_deg >= 90.0),
+            "ramp.slope_deg",
+            "a descending slope must be below 90°",
+        )?;
+        RAMP_DISTANCE.check(self.distance_m)?;
+        RAMP_WIDTH.check(self.width_m)?;
+        RAMP_LENGTH.check(self.length_m)?;
+        RAMP_LANDING.check(self.landing_m)?;
+        RAMP_YAW.check(self.yaw_deg)?;
+        check(
+            self.offset_m.is_finite(),
+            "ramp.offset_m",
+            "must be a finite number",
+        )
+    }
+}
+
+impl SideWall {
+    /// `[[walls]]` number `i`: an accepted x, a finite span with `to_m`
+    /// past `from_m`, a positive height and thickness.
+    fn validate(&self, i: usize) -> Result<(), SceneError> {
+        let key = |k: &str| format!("walls[{i}].{k}");
+        check((WALL_X.accepts)(self.x_m), &key("x_m"), WALL_X.reason)?;
+        check(
+            self.from_m.is_finite() && self.to_m.is_finite(),
+            &key("from_m"),
+            "must be finite",
+        )?;
+        check(
+            self.to_m > self.from_m,
+            &key("to_m"),
+            "must be greater than from_m",
+        )?;
+        check(
+            self.height_m.is_finite() && self.height_m > 0.0,
+            &key("height_m"),
+            "must be > 0",
+        )?;
+        check(
+            self.thickness_m.is_finite() && self.thickness_m > 0.0,
+            &key("thickness_m"),
+            "must be > 0",
+        )
+    }
+}
+
+impl GroundBox {
+    /// `[[boxes]]` number `i`: a finite position and yaw, positive sizes.
+    fn validate(&self, i: usize) -> Result<(), SceneError> {
+        let key = |k: &str| format!("boxes[{i}].{k}");
+        check(
+            self.x_m.is_finite() && self.y_m.is_finite(),
+            &key("x_m"),
+            "must be finite",
+        )?;
+        check(
+            self.size_m.iter().all(|s| s.is_finite() && *s > 0.0),
+            &key("size_m"),
+            "every size must be > 0",
+        )?;
+        check(self.yaw_deg.is_finite(), &key("yaw_deg"), "must be finite")
     }
 }
 

@@ -36,6 +36,13 @@ pub(super) fn draw_line<DB: DrawingBackend>(
     .map_err(plot_error)
 }
 
+/// A panel over the frames, in frame and value coordinates.
+type FrameChart<'a, DB> = ChartContext<
+    'a,
+    DB,
+    Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+>;
+
 /// A panel over the frames: frames along x (whole-frame ticks), `y` up
 /// (`y_desc`), its mesh drawn.
 fn frame_chart<'a, DB: DrawingBackend>(
@@ -43,13 +50,7 @@ fn frame_chart<'a, DB: DrawingBackend>(
     reports: &[MethodReport],
     y: std::ops::Range<f64>,
     y_desc: &str,
-) -> anyhow::Result<
-    ChartContext<
-        'a,
-        DB,
-        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
-    >,
-> {
+) -> anyhow::Result<FrameChart<'a, DB>> {
     let frames = frame_range(reports);
     let mut chart = ChartBuilder::on(area)
         .margin(12)
@@ -69,6 +70,8 @@ fn frame_chart<'a, DB: DrawingBackend>(
     Ok(chart)
 }
 
+/// Draws the slope panel: the ground truth, each method's slopes (lines,
+/// then markers), a note when no frame is ok, and the legend if asked.
 pub(super) fn draw_slopes<DB: DrawingBackend>(
     area: &DrawingArea<DB, plotters::coord::Shift>,
     reports: &[MethodReport],
@@ -76,13 +79,7 @@ pub(super) fn draw_slopes<DB: DrawingBackend>(
 ) -> anyhow::Result<()> {
     let (area, legend_area) = split_legend(area);
     let series = slope_series(reports);
-    let truth = reports.iter().find_map(|r| r.truth_deg).map(|truth| {
-        let sign = reports
-            .iter()
-            .find_map(|r| r.summary.median_slope_deg)
-            .map_or(1.0, f64::signum);
-        (truth, sign * truth)
-    });
+    let truth = signed_truth(reports);
     let slopes = series
         .iter()
         .flat_map(|s| s.points.iter().map(|p| p.1))
@@ -90,23 +87,64 @@ pub(super) fn draw_slopes<DB: DrawingBackend>(
     let mut chart = frame_chart(&area, reports, value_range(slopes, None), "slope (degrees)")?;
     let mut legend = Vec::new();
     if let Some((truth, y)) = truth {
-        let style = SeriesStyle {
-            colour: TRUTH_GREY,
-            width: 3,
-            dashed: false,
-            marker: None,
-        };
-        let x = frame_range(reports);
-        chart
-            .draw_series(LineSeries::new(
-                [(x.start, y), (x.end, y)],
-                style.colour.stroke_width(style.width),
-            ))
-            .map_err(plot_error)?;
-        legend.push((format!("truth {truth:.1}°"), style));
+        legend.push(draw_truth(&mut chart, reports, truth, y)?);
     }
     // Lines first, then every marker, so that no line hides a marker.
-    for s in &series {
+    legend.extend(draw_series_lines(&mut chart, &series)?);
+    draw_series_markers(&mut chart, &series)?;
+    if let Some(lines) = no_ok_note(reports) {
+        draw_centred_note(&chart.plotting_area().strip_coord_spec(), &lines)?;
+    }
+    if with_legend {
+        draw_legend(&legend_area, &legend, &coincidence_notes(&series))?;
+    }
+    Ok(())
+}
+
+/// The recording's ground-truth slope and the height to draw it at: signed
+/// as the first method's median slope (the truth is given unsigned).
+fn signed_truth(reports: &[MethodReport]) -> Option<(f64, f64)> {
+    reports.iter().find_map(|r| r.truth_deg).map(|truth| {
+        let sign = reports
+            .iter()
+            .find_map(|r| r.summary.median_slope_deg)
+            .map_or(1.0, f64::signum);
+        (truth, sign * truth)
+    })
+}
+
+/// Draws the ground truth as a grey line at `y` across the frames; returns
+/// its legend entry.
+fn draw_truth<DB: DrawingBackend>(
+    chart: &mut FrameChart<'_, DB>,
+    reports: &[MethodReport],
+    truth: f64,
+    y: f64,
+) -> anyhow::Result<(String, SeriesStyle)> {
+    let style = SeriesStyle {
+        colour: TRUTH_GREY,
+        width: 3,
+        dashed: false,
+        marker: None,
+    };
+    let x = frame_range(reports);
+    chart
+        .draw_series(LineSeries::new(
+            [(x.start, y), (x.end, y)],
+            style.colour.stroke_width(style.width),
+        ))
+        .map_err(plot_error)?;
+    Ok((format!("truth {truth:.1}°"), style))
+}
+
+/// Draws the line of each of `series` (dashed or not, no markers); returns
+/// their legend entries, in order.
+fn draw_series_lines<DB: DrawingBackend>(
+    chart: &mut FrameChart<'_, DB>,
+    series: &[Series],
+) -> anyhow::Result<Vec<(String, SeriesStyle)>> {
+    let mut legend = Vec::with_capacity(series.len());
+    for s in series {
         let stroke = s.style.colour.stroke_width(s.style.width);
         if s.style.dashed {
             chart
@@ -124,22 +162,24 @@ pub(super) fn draw_slopes<DB: DrawingBackend>(
         }
         legend.push((s.label.clone(), s.style));
     }
-    for s in &series {
+    Ok(legend)
+}
+
+/// Draws the markers of each of `series` that has some.
+fn draw_series_markers<DB: DrawingBackend>(
+    chart: &mut FrameChart<'_, DB>,
+    series: &[Series],
+) -> anyhow::Result<()> {
+    for s in series {
         if let Some(marker) = s.style.marker {
             draw_markers!(
                 ChartContext::draw_series,
-                &mut chart,
+                &mut *chart,
                 marker,
                 s.points.iter().copied(),
                 s.style.colour
             )?;
         }
-    }
-    if let Some(lines) = no_ok_note(reports) {
-        draw_centred_note(&chart.plotting_area().strip_coord_spec(), &lines)?;
-    }
-    if with_legend {
-        draw_legend(&legend_area, &legend, &coincidence_notes(&series))?;
     }
     Ok(())
 }
