@@ -327,6 +327,41 @@ patch_per_rms = -1
         assert!(!e.to_string().contains("distance"), "{e}");
     }
 
+    /// A count with an extra zero or three would stall every frame past the
+    /// service watchdog (K = 100000 ran over a minute a frame): refused, by
+    /// key and range; the bounds themselves are accepted.
+    #[test]
+    fn absurd_counts_are_refused_by_key_and_range() {
+        for (text, message) in [
+            (
+                "[normals]\nneighbours = 100000\n",
+                "`normals.neighbours` = 100000: must be in 3..=1000",
+            ),
+            (
+                "[kmeans]\nclusters = 1000000000\n",
+                "`kmeans.clusters` = 1000000000: must be in 1..=16",
+            ),
+            (
+                "[kmeans]\nmax_iterations = 5000\n",
+                "`kmeans.max_iterations` = 5000: must be in 1..=1000",
+            ),
+            (
+                "[cumulative]\ndraws = 10000000000\n",
+                "`cumulative.draws` = 10000000000: must be in 1..=1000000",
+            ),
+            (
+                "[ransac]\nmax_iterations = 100000\n",
+                "`ransac.max_iterations` = 100000: must be in 1..=10000",
+            ),
+        ] {
+            let e = EstimatorConfig::from_toml_str(text).unwrap_err();
+            assert!(e.to_string().contains(message), "{text}: {e}");
+        }
+        let most = "[normals]\nneighbours = 1000\n[kmeans]\nclusters = 16\nmax_iterations = 1000\n\
+                    [cumulative]\ndraws = 1000000\n[ransac]\nmax_iterations = 10000\n";
+        assert!(EstimatorConfig::from_toml_str(most).is_ok());
+    }
+
     #[test]
     fn method_names() {
         assert_eq!(parse_method("paper"), Some(SlopeMethod::Paper));

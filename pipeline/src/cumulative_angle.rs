@@ -25,7 +25,7 @@ use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 
 use crate::cloud::angle_between_deg;
-use crate::validate::{at_least, InvalidValue};
+use crate::validate::{count_in, InvalidValue};
 use serde::{Deserialize, Serialize};
 
 /// Mean and spread of the averaged angles.
@@ -114,7 +114,7 @@ impl Default for CumulativeConfig {
 impl CumulativeConfig {
     /// Checks every value's range; the error names the first bad key.
     pub fn validate(&self) -> Result<(), InvalidValue> {
-        at_least("draws", self.draws, 1)
+        count_in("draws", self.draws, 1, 1_000_000)
     }
 }
 

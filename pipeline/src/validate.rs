@@ -75,6 +75,17 @@ pub fn at_least(key: &str, v: usize, min: usize) -> Result<(), InvalidValue> {
     check(v >= min, key, v, format!("must be at least {min}"))
 }
 
+/// A count in `min..=max`: the upper bounds keep a mistyped count (an extra
+/// zero or three) from stalling every frame past the service watchdog.
+pub fn count_in(key: &str, v: usize, min: usize, max: usize) -> Result<(), InvalidValue> {
+    check(
+        (min..=max).contains(&v),
+        key,
+        v,
+        format!("must be in {min}..={max}"),
+    )
+}
+
 /// `Ok` when `ok`, else the error for `key` = `v`.
 pub fn check(
     ok: bool,
@@ -107,5 +118,11 @@ mod tests {
             at_least("neighbours", 2, 3).unwrap_err().to_string(),
             "`neighbours` = 2: must be at least 3"
         );
+        assert!(count_in("k", 3, 3, 10).is_ok() && count_in("k", 10, 3, 10).is_ok());
+        assert_eq!(
+            count_in("k", 11, 3, 10).unwrap_err().to_string(),
+            "`k` = 11: must be in 3..=10"
+        );
+        assert!(count_in("k", 2, 3, 10).is_err());
     }
 }

@@ -1,6 +1,6 @@
 //! The clustering's parameters.
 
-use crate::validate::{at_least, non_negative, InvalidValue};
+use crate::validate::{count_in, non_negative, InvalidValue};
 use serde::{Deserialize, Serialize};
 
 /// Cosine k-means (`cosine_kmeans/`).
@@ -29,8 +29,8 @@ impl Default for KmeansConfig {
 impl KmeansConfig {
     /// Checks every value's range; the error names the first bad key.
     pub fn validate(&self) -> Result<(), InvalidValue> {
-        at_least("clusters", self.clusters, 1)?;
-        at_least("max_iterations", self.max_iterations, 1)?;
+        count_in("clusters", self.clusters, 1, 16)?;
+        count_in("max_iterations", self.max_iterations, 1, 1000)?;
         non_negative("merge_spread_ratio", self.merge_spread_ratio)
     }
 }

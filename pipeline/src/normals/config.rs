@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::validate::{at_least, non_negative, InvalidValue};
+use crate::validate::{at_least, count_in, non_negative, InvalidValue};
 
 /// Normal estimation (`normals/`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -69,7 +69,7 @@ impl NormalsConfig {
 impl NormalsConfig {
     /// Checks every value's range; the error names the first bad key.
     pub fn validate(&self) -> Result<(), InvalidValue> {
-        at_least("neighbours", self.neighbours, 3)?;
+        count_in("neighbours", self.neighbours, 3, 1000)?;
         at_least("max_window_radius_px", self.max_window_radius_px, 1)?;
         non_negative("min_patch_radius_m", self.min_patch_radius_m)?;
         non_negative("patch_per_rms", self.patch_per_rms)

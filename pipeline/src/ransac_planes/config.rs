@@ -3,7 +3,9 @@
 use serde::{Deserialize, Serialize};
 
 use super::MAX_PLANES;
-use crate::validate::{angle, at_least, check, fraction, non_negative, positive, InvalidValue};
+use crate::validate::{
+    angle, at_least, check, count_in, fraction, non_negative, positive, InvalidValue,
+};
 
 /// RANSAC plane segmentation .
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -67,7 +69,7 @@ impl RansacConfig {
     pub fn validate(&self) -> Result<(), InvalidValue> {
         positive("distance_threshold_m", self.distance_threshold_m)?;
         non_negative("distance_threshold_per_m2", self.distance_threshold_per_m2)?;
-        at_least("max_iterations", self.max_iterations, 1)?;
+        count_in("max_iterations", self.max_iterations, 1, 10_000)?;
         check(
             self.confidence > 0.0 && self.confidence < 1.0,
             "confidence",
