@@ -101,6 +101,11 @@ for unit in "${units[@]}"; do
             fail "$unit lacks RestartPreventExitStatus=78 2 (a config or usage error would restart forever)"
         ;;
     esac
+    # The capture is ready only with its first cloud: a unit ordered after it
+    # would not start while no Kinect is plugged in.
+    if grep -Eq '^After=.*slope-capture' "$root/usr/lib/systemd/system/$unit"; then
+        fail "$unit is ordered After=slope-capture.service: it would wait for the Kinect"
+    fi
 done
 
 # The sysusers and tmpfiles entries parse and do what the units need, in the
