@@ -6,7 +6,8 @@ use std::time::Duration;
 
 use anyhow::Context;
 use clap::Parser;
-use slope_ipc_types::{ServiceNames, DEFAULT_MAX_CLOUD_POINTS};
+use slope_ipc_types::{CloudHeader, ServiceNames, DEFAULT_MAX_CLOUD_POINTS, SENSOR_NAME_LEN};
+use slope_pipeline::sensor_noise::NoiseModel;
 use slope_sensor::ipc::{create_node, CloudPublisher};
 use slope_sensor::publish::{publish_stream, Pacing, PublishOptions, PublishStats, StopFlag};
 use slope_sensor::source::{FrameSource, RecordingSource};
@@ -141,6 +142,12 @@ pub fn run(args: &ReplayArgs, stop: &StopFlag) -> anyhow::Result<PublishStats> {
     let recording = open_recording(&args.recording, args.max_points)
         .with_context(|| format!("cannot replay {}", args.recording.display()))?;
     let frames = recording.frames().len();
+    check_carried_sensor_name(&recording.meta().sensor).with_context(|| {
+        format!(
+            "cannot replay {}: its recording.toml `sensor` does not fit a cloud",
+            args.recording.display()
+        )
+    })?;
     let mut source = RecordingSource::new(recording, args.looping);
     let names = service_names(args)?;
     let node = create_node(&node_name("slope-replay"))?;
@@ -187,6 +194,44 @@ pub fn run(args: &ReplayArgs, stop: &StopFlag) -> anyhow::Result<PublishStats> {
     Ok(stats)
 }
 
+/// A cloud carries the sensor's name in [`SENSOR_NAME_LEN`] bytes, and
+/// `slope-estimator` picks its noise model from it. A longer name is cut
+/// (with a warning); when the cut name would give another noise model than
+/// the whole one (which `slope-eval` and this recording's own readers use),
+/// the replay would make the estimator's slopes differ from `slope-eval`'s
+/// without a word: refused, saying how to fix it.
+fn check_carried_sensor_name(name: &str) -> anyhow::Result<()> {
+    let mut header = CloudHeader::default();
+    header.set_sensor_name(name);
+    let carried = header.sensor_name();
+    if carried == name {
+        return Ok(());
+    }
+    let (whole, cut) = (
+        NoiseModel::for_sensor(name),
+        NoiseModel::for_sensor(carried),
+    );
+    if whole != cut {
+        anyhow::bail!(
+            "the sensor name {name:?} is {} bytes and a cloud carries {SENSOR_NAME_LEN} ({carried:?}): \
+             slope-estimator would use the {} noise model where the whole name gives {} \
+             (as slope-eval uses); shorten `sensor` to at most {SENSOR_NAME_LEN} bytes that keep \
+             the camera's name (e.g. \"{}\")",
+            name.len(),
+            cut.name(),
+            whole.name(),
+            whole.name()
+        );
+    }
+    tracing::warn!(
+        sensor = name,
+        carried,
+        "the sensor name is longer than a cloud carries ({SENSOR_NAME_LEN} bytes): subscribers \
+         (and a slope-record of this replay) see it cut"
+    );
+    Ok(())
+}
+
 /// The service names: `--service-prefix`, else the config file's.
 fn service_names(args: &ReplayArgs) -> anyhow::Result<ServiceNames> {
     let path = config_path(args.config.as_deref(), Path::new(DEFAULT_CONFIG_PATH));
@@ -213,6 +258,26 @@ fn wait_subscribers_arg(text: &str) -> Result<usize, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_sensor_name_cut_into_another_noise_model_is_refused() {
+        assert!(check_carried_sensor_name("kinect2").is_ok());
+        assert!(check_carried_sensor_name(&"x".repeat(SENSOR_NAME_LEN)).is_ok());
+        // Cut, but "kinect1" stays within the 32 bytes: the same model.
+        assert!(check_carried_sensor_name("kinect1 in the lab, second floor, left wing").is_ok());
+        // "Xtion" falls beyond byte 32: the cut name reads as a Kinect v2.
+        let long = "freiburg1 desk sequence, Asus Xtion";
+        let err = check_carried_sensor_name(long).expect_err("the model would change");
+        let text = err.to_string();
+        assert!(
+            text.contains("\"freiburg1 desk sequence, Asus Xt\""),
+            "{text}"
+        );
+        assert!(
+            text.contains("kinect2 noise model where the whole name gives kinect1"),
+            "{text}"
+        );
+    }
 
     #[test]
     fn a_wait_timeout_needs_wait_subscribers() {
