@@ -48,6 +48,52 @@ impl StopFlag {
     }
 }
 
+/// Tells a second stop request (the user insisting: end at once) from one
+/// request delivered twice. GNU `timeout` signals its child and then the
+/// child's process group, so two SIGTERMs arrive microseconds apart; a
+/// signal within [`StopSignals::REPEAT_GRACE`] of the first counts as that
+/// first one: 50 ms, far more than the scheduler puts between the two, far
+/// less than a person takes to press Ctrl-C again. For the one
+/// signal-handler thread of a program.
+#[derive(Debug, Default)]
+pub struct StopSignals {
+    first: Option<Instant>,
+}
+
+/// What a stop signal asks for ([`StopSignals::note`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StopRequest {
+    /// The first: stop after the work in hand.
+    First,
+    /// The first again (within [`StopSignals::REPEAT_GRACE`]): nothing new.
+    Repeat,
+    /// A second request: end at once.
+    Second,
+}
+
+impl StopSignals {
+    /// Signals this close to the first are one request.
+    pub const REPEAT_GRACE: Duration = Duration::from_millis(50);
+
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Notes a signal arriving `now` and says what it asks for.
+    pub fn note(&mut self, now: Instant) -> StopRequest {
+        match self.first {
+            None => {
+                self.first = Some(now);
+                StopRequest::First
+            }
+            Some(first) if now.saturating_duration_since(first) < Self::REPEAT_GRACE => {
+                StopRequest::Repeat
+            }
+            Some(_) => StopRequest::Second,
+        }
+    }
+}
+
 /// When to send each frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Pacing {
@@ -238,5 +284,23 @@ mod tests {
         stop.stop();
         assert!(!stop.sleep(Duration::from_secs(3600)));
         assert!(stop.clone().is_stopped());
+    }
+
+    /// `timeout`'s two SIGTERMs (microseconds apart) are one request; a
+    /// signal 50 ms or more after the first (no one presses Ctrl-C again
+    /// that fast) is a second one.
+    #[test]
+    fn a_signal_repeated_at_once_is_one_request() {
+        let t0 = Instant::now();
+        let mut signals = StopSignals::new();
+        let at = |ms: u64| t0 + Duration::from_millis(ms);
+        assert_eq!(signals.note(t0), StopRequest::First);
+        assert_eq!(
+            signals.note(t0 + Duration::from_micros(30)),
+            StopRequest::Repeat
+        );
+        assert_eq!(signals.note(at(49)), StopRequest::Repeat);
+        assert_eq!(signals.note(at(50)), StopRequest::Second);
+        assert_eq!(signals.note(at(3000)), StopRequest::Second);
     }
 }

@@ -12,6 +12,7 @@ use std::time::{Duration, Instant};
 use nix::sys::signal::Signal;
 use serde_json::Value;
 use slope_integration_tests::{deadline, recording, unique_prefix, Proc};
+use slope_sensor::publish::StopSignals;
 use slope_sensor::recording::{DepthImage, Recording};
 
 /// slope-record waiting for clouds that never come.
@@ -355,18 +356,25 @@ const PREVIOUS: &[u8] = b"the previous conversion";
 /// slope-convert of `dir` into `ramp16.mcap` of a new directory that holds
 /// a previous output ([`PREVIOUS`]), once its first frame is converted.
 fn start_conversion(dir: &Path) -> (tempfile::TempDir, std::path::PathBuf, Proc) {
+    start_conversion_with(dir, &[])
+}
+
+/// [`start_conversion`] with more flags for slope-convert.
+fn start_conversion_with(
+    dir: &Path,
+    extra: &[&str],
+) -> (tempfile::TempDir, std::path::PathBuf, Proc) {
     let out_dir = tempfile::tempdir().expect("temp dir");
     let out = out_dir.path().join("ramp16.mcap");
     std::fs::write(&out, PREVIOUS).expect("write the previous file");
-    let mut convert = Proc::spawn(
-        "slope-convert",
-        [
-            dir.to_str().expect("utf-8 path"),
-            "-o",
-            out.to_str().expect("utf-8 path"),
-            "-v",
-        ],
-    );
+    let mut args = vec![
+        dir.to_str().expect("utf-8 path"),
+        "-o",
+        out.to_str().expect("utf-8 path"),
+        "-v",
+    ];
+    args.extend_from_slice(extra);
+    let mut convert = Proc::spawn("slope-convert", args);
     let line = convert.wait_stderr("frame converted", deadline(60.0));
     assert!(line.is_some(), "{}", convert.diagnostics());
     (out_dir, out, convert)
@@ -423,48 +431,84 @@ fn names_in(dir: &Path) -> Vec<std::ffi::OsString> {
         .collect()
 }
 
-/// slope-convert told twice to stop (a second SIGINT once the first was
-/// taken, while frames are still being converted): status 130 at once,
-/// the previous output as it was, and no temporary `.part` file left
-/// beside it. The second signal may lose the race with the end of the
-/// conversion (status 0 and a finished file, the first signal's clean
-/// stop); then the run is tried again, at most 5 times.
+/// slope-convert told twice to stop (a second SIGINT a moment after the
+/// first, while the frame in hand is still being estimated): status 130 at
+/// once, the previous output as it was, and no temporary `.part` file left
+/// beside it. The estimator takes exact k-d tree normals here (about 2 s a
+/// frame instead of 50 ms), so that the stop after the frame in hand lasts
+/// long enough for a second request, which must come later than the
+/// grace period in which a signal counts as the first one repeated.
 #[test]
 fn a_second_signal_ends_a_conversion_without_leaving_its_temporary_file() {
     let dir = recording("ramp16");
+    let config = tempfile::NamedTempFile::new().expect("temp file");
+    std::fs::write(
+        config.path(),
+        "[estimator.normals]\nneighbourhood = \"kd-tree\"\n",
+    )
+    .expect("write the config");
+    let config = config.path().to_str().expect("utf-8 path");
+    let (out_dir, out, mut convert) = start_conversion_with(&dir, &["--config", config]);
+    // The temporary file is there, beside the previous output.
+    assert_eq!(
+        names_in(out_dir.path()).len(),
+        2,
+        "{}",
+        convert.diagnostics()
+    );
+    convert.signal(Signal::SIGINT);
+    let taken = convert.wait_stderr("a second SIGINT/SIGTERM ends", deadline(10.0));
+    assert!(taken.is_some(), "{}", convert.diagnostics());
+    // Not synchronisation: what is under test depends on the time between
+    // the signals (within the grace period it would be the first repeated).
+    std::thread::sleep(StopSignals::REPEAT_GRACE * 2);
+    convert.signal(Signal::SIGINT);
+    let status = convert.wait_exit(deadline(10.0));
+    let diagnostics = convert.diagnostics();
+    let status = status.unwrap_or_else(|| panic!("no exit within 10 s\n{diagnostics}"));
+    assert_eq!(status.code(), Some(130), "{diagnostics}");
+    assert_eq!(
+        names_in(out_dir.path()),
+        [std::ffi::OsString::from("ramp16.mcap")],
+        "{diagnostics}"
+    );
+    let bytes = std::fs::read(&out).expect("the output");
+    assert_eq!(bytes, PREVIOUS, "{diagnostics}");
+}
+
+/// The same signal twice at once, as GNU `timeout` sends it (to the child,
+/// then to its process group): one request, a clean stop with status 0 and
+/// a finished output, not the second signal's status 130. The second is
+/// sent once the first was taken (two pending signals would merge into
+/// one), within the grace period; a run where the machine was too slow for
+/// that is tried again, at most 5 times.
+#[test]
+fn a_signal_sent_twice_at_once_is_one_clean_stop() {
+    let dir = recording("ramp16");
     for _attempt in 0..5 {
         let (out_dir, out, mut convert) = start_conversion(&dir);
-        // The temporary file is there, beside the previous output.
-        assert_eq!(
-            names_in(out_dir.path()).len(),
-            2,
-            "{}",
-            convert.diagnostics()
-        );
-        convert.signal(Signal::SIGINT);
+        let first = Instant::now();
+        convert.signal(Signal::SIGTERM);
         let taken = convert.wait_stderr("a second SIGINT/SIGTERM ends", deadline(10.0));
         assert!(taken.is_some(), "{}", convert.diagnostics());
-        convert.signal(Signal::SIGINT);
-        let status = convert.wait_exit(deadline(10.0));
+        convert.signal(Signal::SIGTERM);
+        let in_grace = first.elapsed() < StopSignals::REPEAT_GRACE / 2;
+        let status = convert.wait_exit(deadline(20.0));
         let diagnostics = convert.diagnostics();
-        let status = status.unwrap_or_else(|| panic!("no exit within 10 s\n{diagnostics}"));
+        let status = status.unwrap_or_else(|| panic!("no exit within 20 s\n{diagnostics}"));
+        if !in_grace {
+            continue;
+        }
+        assert_eq!(status.code(), Some(0), "{diagnostics}");
         assert_eq!(
             names_in(out_dir.path()),
             [std::ffi::OsString::from("ramp16.mcap")],
-            "{status}\n{diagnostics}"
+            "{diagnostics}"
         );
         let bytes = std::fs::read(&out).expect("the output");
-        match status.code() {
-            Some(130) => {
-                assert_eq!(bytes, PREVIOUS, "{diagnostics}");
-                return;
-            }
-            Some(0) => {
-                let summary = mcap::Summary::read(&bytes).expect("a finished MCAP file");
-                assert!(summary.is_some(), "{diagnostics}");
-            }
-            _ => panic!("exited with {status}\n{diagnostics}"),
-        }
+        let summary = mcap::Summary::read(&bytes).expect("a finished MCAP file");
+        assert!(summary.is_some(), "{diagnostics}");
+        return;
     }
-    panic!("in 5 runs, the conversion always finished before the second signal");
+    panic!("in 5 runs, the second signal never came within the grace period");
 }

@@ -10,7 +10,7 @@ use slope_ipc_types::{ServiceNames, DEFAULT_SERVICE_PREFIX, SERVICE_PREFIX_ENV};
 use crate::config_file::{
     config_path, is_config_error, SlopeFile, DEFAULT_CONFIG_PATH, EXIT_CONFIG,
 };
-use slope_sensor::publish::StopFlag;
+use slope_sensor::publish::{StopFlag, StopRequest, StopSignals};
 use slope_sensor::recording::Recording;
 use tracing_subscriber::EnvFilter;
 
@@ -318,18 +318,22 @@ pub fn error_report(err: &anyhow::Error) -> String {
 /// Installs the SIGINT/SIGTERM handler and returns the flag it sets. The
 /// first signal sets the flag (and says so in the log); a second one ends
 /// the program at once with status 130, after removing the temporary files
-/// of unfinished outputs ([`crate::unfinished_files`]).
+/// of unfinished outputs ([`crate::unfinished_files`]). A signal repeated
+/// within 50 ms is the same request ([`StopSignals`]: `timeout`
+/// sends two).
 pub fn stop_on_signals() -> anyhow::Result<StopFlag> {
     let stop = StopFlag::new();
     let handler_flag = stop.clone();
-    ctrlc::set_handler(move || {
-        if handler_flag.is_stopped() {
-            // A second signal while shutting down: the user means it. No
-            // temporary file of an unfinished output stays behind.
-            crate::unfinished_files::remove_all_and_exit(130);
+    let mut signals = StopSignals::new();
+    ctrlc::set_handler(move || match signals.note(std::time::Instant::now()) {
+        // A second signal while shutting down: the user means it. No
+        // temporary file of an unfinished output stays behind.
+        StopRequest::Second => crate::unfinished_files::remove_all_and_exit(130),
+        StopRequest::Repeat => {}
+        StopRequest::First => {
+            tracing::info!("stopping; a second SIGINT/SIGTERM ends the program at once");
+            handler_flag.stop();
         }
-        tracing::info!("stopping; a second SIGINT/SIGTERM ends the program at once");
-        handler_flag.stop();
     })
     .map_err(|e| anyhow::anyhow!("failed to install the SIGINT/SIGTERM handler: {e}"))?;
     Ok(stop)

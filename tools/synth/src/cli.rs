@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::{Parser, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
-use slope_sensor::publish::StopFlag;
+use slope_sensor::publish::{StopFlag, StopRequest, StopSignals};
 use slope_sensor::recording::PngCompression;
 
 use crate::recording::{write_recording_with, RecordingSummary, WriteOptions};
@@ -291,15 +291,17 @@ impl Args {
 }
 
 /// Installs the SIGINT/SIGTERM handler and returns the flag it sets; a
-/// second signal while stopping ends the process at once (status 130).
+/// second signal while stopping ends the process at once (status 130). A
+/// signal repeated within 50 ms is the same request
+/// ([`StopSignals`]: `timeout` sends two).
 pub fn stop_on_signals() -> anyhow::Result<StopFlag> {
     let stop = StopFlag::new();
     let handler_flag = stop.clone();
-    ctrlc::set_handler(move || {
-        if handler_flag.is_stopped() {
-            std::process::exit(130);
-        }
-        handler_flag.stop();
+    let mut signals = StopSignals::new();
+    ctrlc::set_handler(move || match signals.note(std::time::Instant::now()) {
+        StopRequest::Second => std::process::exit(130),
+        StopRequest::Repeat => {}
+        StopRequest::First => handler_flag.stop(),
     })
     .context("failed to install the SIGINT/SIGTERM handler")?;
     Ok(stop)
