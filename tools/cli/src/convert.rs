@@ -14,6 +14,7 @@ use anyhow::{bail, Context};
 use clap::Parser;
 use slope_ipc_types::{CloudPoint, SlopeEstimate, DEFAULT_MAX_CLOUD_POINTS};
 use slope_pipeline::{CloudView, Estimator, FrameInfo};
+use slope_sensor::error_chain::ErrorChain;
 use slope_sensor::recording::{ColorImage, DepthImage, FrameEntry, Recording};
 
 use slope_sensor::publish::StopFlag;
@@ -176,7 +177,11 @@ fn convert_frames(
             break;
         }
         if let Err(err) = recording.read_depth_into(frame, &mut depth) {
-            tracing::warn!(frame = frame.index, "skipping a bad frame: {err}");
+            tracing::warn!(
+                frame = frame.index,
+                "skipping a bad frame: {}",
+                ErrorChain(&err)
+            );
             stats.bad_frames += 1;
             continue;
         }
@@ -291,7 +296,7 @@ fn read_color(
             tracing::warn!(
                 frame = frame.index,
                 "converting without colour: {}",
-                slope_sensor::error_chain::ErrorChain(&err)
+                ErrorChain(&err)
             );
             stats.bad_colors += 1;
             None

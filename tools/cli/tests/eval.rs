@@ -681,6 +681,47 @@ fn a_bad_frame_is_reported_and_the_others_evaluated() {
     );
 }
 
+/// A bad frame's error gives its cause: what the decoder or the file
+/// system said (it stopped at "cannot decode X" / "cannot read X"), in the
+/// JSON, the table and the warning.
+#[test]
+fn a_bad_frame_error_names_its_cause() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = write_recording(&dir.path().join("ramp"), &[16.0; 3], Truth::Recording(16.0));
+    let truncated = rec.join("depth/000001.png");
+    let bytes = std::fs::read(&truncated).unwrap();
+    std::fs::write(&truncated, &bytes[..bytes.len() / 2]).unwrap();
+    std::fs::remove_file(rec.join("depth/000002.png")).unwrap();
+    let decode = format!(
+        "cannot decode {}: unexpected end of file",
+        path_str(&truncated)
+    );
+    let read = format!(
+        "cannot read {}/depth/000002.png: No such file or directory",
+        path_str(&rec)
+    );
+    let out = eval(&[path_str(&rec), "--json", "--method", "tls"]);
+    assert!(out.success, "{}", out.stderr);
+    let reports = json_lines(&out.stdout);
+    let error = |k: usize| {
+        reports[0]["estimates"][k]["error"]
+            .as_str()
+            .unwrap()
+            .to_owned()
+    };
+    assert!(error(1).ends_with(&decode), "{}", error(1));
+    assert!(error(2).contains(&read), "{}", error(2));
+    assert!(
+        out.stderr.contains(&decode) && out.stderr.contains(&read),
+        "{}",
+        out.stderr
+    );
+    let out = eval(&[path_str(&rec), "--method", "tls"]);
+    assert!(out.success, "{}", out.stderr);
+    let first_bad = format!("first bad frame (1): frames.csv line 3: {decode}\n");
+    assert!(out.stdout.contains(&first_bad), "{}", out.stdout);
+}
+
 #[test]
 fn the_table_has_a_row_per_method_and_the_stage_breakdown() {
     let dir = tempfile::tempdir().unwrap();

@@ -5,6 +5,7 @@
 use indicatif::ProgressBar;
 use slope_ipc_types::{CloudPoint, EstimateStatus};
 use slope_pipeline::{CloudView, Estimator, FrameInfo};
+use slope_sensor::error_chain::ErrorChain;
 use slope_sensor::publish::StopFlag;
 use slope_sensor::recording::{DepthImage, FrameEntry, Recording};
 
@@ -54,7 +55,10 @@ pub(super) fn evaluate_recording(
         let wanted = target.artifacts.wants(position, frame.index, frames.len());
         let truth_deg = recording.truth_deg(frame);
         match recording.read_depth_into(frame, &mut depth) {
-            Err(err) => tally.bad_frame(frame.index, truth_deg, wanted, err.to_string()),
+            Err(err) => {
+                let error = ErrorChain(&err).to_string();
+                tally.bad_frame(frame.index, truth_deg, wanted, error);
+            }
             Ok(()) => {
                 projector.project_into(&depth.data, None, &mut points);
                 let view = CloudView {

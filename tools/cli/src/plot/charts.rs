@@ -1,4 +1,5 @@
-//! The two panels: the slopes over the frames, and the time per frame.
+//! The two panels: the slopes over the frames, and the time per frame;
+//! in each, an x under every frame that is not `ok`.
 
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
@@ -21,12 +22,16 @@ where
     Ok(())
 }
 
-/// Draws `points` as a line in `style` (dashed or not; the markers apart).
+/// Draws `points` as a line in `style` (dashed or not; the markers apart;
+/// nothing for width 0).
 pub(super) fn draw_line<DB: DrawingBackend>(
     area: &DrawingArea<DB, plotters::coord::Shift>,
     points: Vec<(i32, i32)>,
     style: SeriesStyle,
 ) -> anyhow::Result<()> {
+    if style.width == 0 {
+        return Ok(());
+    }
     let stroke = style.colour.stroke_width(style.width);
     if style.dashed {
         area.draw(&DashedPathElement::new(points, DASH.0, DASH.1, stroke))
@@ -35,6 +40,11 @@ pub(super) fn draw_line<DB: DrawingBackend>(
     }
     .map_err(plot_error)
 }
+
+/// Width of the y label area, pixels: the widest tick label ("1000.0" at
+/// 15 px) beside the axis name, with no overlap (at 56 "time per frame
+/// (ms)" was drawn over "120.0").
+pub(super) const Y_LABEL_AREA: u32 = 84;
 
 /// A panel over the frames, in frame and value coordinates.
 type FrameChart<'a, DB> = ChartContext<
@@ -55,7 +65,7 @@ fn frame_chart<'a, DB: DrawingBackend>(
     let mut chart = ChartBuilder::on(area)
         .margin(12)
         .x_label_area_size(36)
-        .y_label_area_size(56)
+        .y_label_area_size(Y_LABEL_AREA)
         .build_cartesian_2d(frames.clone(), y)
         .map_err(plot_error)?;
     chart
@@ -82,9 +92,10 @@ pub(super) fn draw_slopes<DB: DrawingBackend>(
     let truth = signed_truth(reports);
     let slopes = series
         .iter()
-        .flat_map(|s| s.points.iter().map(|p| p.1))
+        .flat_map(|s| s.points().map(|p| p.1))
         .chain(truth.map(|t| t.1));
-    let mut chart = frame_chart(&area, reports, value_range(slopes, None), "slope (degrees)")?;
+    let y = value_range(slopes, None);
+    let mut chart = frame_chart(&area, reports, y.clone(), "slope (degrees)")?;
     let mut legend = Vec::new();
     if let Some((truth, y)) = truth {
         legend.push(draw_truth(&mut chart, reports, truth, y)?);
@@ -92,6 +103,7 @@ pub(super) fn draw_slopes<DB: DrawingBackend>(
     // Lines first, then every marker, so that no line hides a marker.
     legend.extend(draw_series_lines(&mut chart, &series)?);
     draw_series_markers(&mut chart, &series)?;
+    legend.extend(draw_not_ok(&mut chart, reports, y.start)?);
     if let Some(lines) = no_ok_note(reports) {
         draw_centred_note(&chart.plotting_area().strip_coord_spec(), &lines)?;
     }
@@ -137,8 +149,9 @@ fn draw_truth<DB: DrawingBackend>(
     Ok((format!("truth {truth:.1}°"), style))
 }
 
-/// Draws the line of each of `series` (dashed or not, no markers); returns
-/// their legend entries, in order.
+/// Draws the lines of each of `series` (dashed or not, no markers), one
+/// per run, so that no line crosses a frame without a value; a run of one
+/// point without markers is a dot. Returns their legend entries, in order.
 fn draw_series_lines<DB: DrawingBackend>(
     chart: &mut FrameChart<'_, DB>,
     series: &[Series],
@@ -146,23 +159,56 @@ fn draw_series_lines<DB: DrawingBackend>(
     let mut legend = Vec::with_capacity(series.len());
     for s in series {
         let stroke = s.style.colour.stroke_width(s.style.width);
-        if s.style.dashed {
-            chart
-                .draw_series(DashedLineSeries::new(
-                    s.points.iter().copied(),
-                    DASH.0,
-                    DASH.1,
-                    stroke,
-                ))
-                .map_err(plot_error)?;
-        } else {
-            chart
-                .draw_series(LineSeries::new(s.points.iter().copied(), stroke))
-                .map_err(plot_error)?;
+        for run in &s.runs {
+            if let ([point], None) = (&run[..], s.style.marker) {
+                let dot = Circle::new(*point, s.style.width + 1, s.style.colour.filled());
+                chart.draw_series([dot]).map_err(plot_error)?;
+            } else if s.style.dashed {
+                let line = DashedLineSeries::new(run.iter().copied(), DASH.0, DASH.1, stroke);
+                chart.draw_series(line).map_err(plot_error)?;
+            } else {
+                let line = LineSeries::new(run.iter().copied(), stroke);
+                chart.draw_series(line).map_err(plot_error)?;
+            }
         }
         legend.push((s.label.clone(), s.style));
     }
     Ok(legend)
+}
+
+/// Pixels between the rows of x's under the frames that are not `ok` (one
+/// row per method, the first at the bottom).
+const NOT_OK_ROW: i32 = 11;
+
+/// Draws an x in the method's colour under each frame of `reports` that is
+/// not `ok`, at the bottom of the panel (`y_bottom`), a row per method;
+/// returns the legend entry "not ok" when there is one.
+fn draw_not_ok<DB: DrawingBackend>(
+    chart: &mut FrameChart<'_, DB>,
+    reports: &[MethodReport],
+    y_bottom: f64,
+) -> anyhow::Result<Option<(String, SeriesStyle)>> {
+    let mut any = false;
+    for (row, report) in reports.iter().enumerate() {
+        let frames = not_ok_frames(report);
+        any |= !frames.is_empty();
+        let style = method_colour(report.method).stroke_width(2);
+        let dy = -7 - NOT_OK_ROW * row as i32;
+        chart
+            .draw_series(
+                frames
+                    .into_iter()
+                    .map(|x| EmptyElement::at((x, y_bottom)) + Cross::new((0, dy), 4, style)),
+            )
+            .map_err(plot_error)?;
+    }
+    let style = SeriesStyle {
+        colour: NOTE_GREY,
+        width: 0,
+        dashed: false,
+        marker: Some(Marker::Cross),
+    };
+    Ok(any.then(|| ("not ok".to_string(), style)))
 }
 
 /// Draws the markers of each of `series` that has some.
@@ -176,7 +222,7 @@ fn draw_series_markers<DB: DrawingBackend>(
                 ChartContext::draw_series,
                 &mut *chart,
                 marker,
-                s.points.iter().copied(),
+                s.points(),
                 s.style.colour
             )?;
         }
@@ -225,42 +271,26 @@ pub(super) fn draw_times<DB: DrawingBackend>(
             .iter()
             .filter_map(|f| Some(f.ms.as_ref()?.0.total_ms))
     });
-    let mut chart = frame_chart(
-        &area,
-        reports,
-        value_range(times, Some(0.0)),
-        "time per frame (ms)",
-    )?;
-    let mut legend = Vec::new();
-    for report in reports {
-        let style = SeriesStyle {
-            colour: method_colour(report.method),
-            width: 2,
-            dashed: false,
-            marker: None,
-        };
-        let points: Vec<(f64, f64)> = report
-            .estimates
-            .iter()
-            .filter_map(|f| Some((f.index as f64, f.ms.as_ref()?.0.total_ms)))
-            .collect();
-        // A line needs two points: a single frame is drawn as a marker.
-        let markers = if points.len() == 1 { &points[..] } else { &[] };
-        chart
-            .draw_series(
-                markers
-                    .iter()
-                    .map(|&p| Circle::new(p, 4, style.colour.filled())),
-            )
-            .map_err(plot_error)?;
-        chart
-            .draw_series(LineSeries::new(
-                points,
-                style.colour.stroke_width(style.width),
-            ))
-            .map_err(plot_error)?;
-        legend.push((format!("{} time", report.method.name()), style));
-    }
+    let y = value_range(times, Some(0.0));
+    let mut chart = frame_chart(&area, reports, y.clone(), "time per frame (ms)")?;
+    let series: Vec<Series> = reports
+        .iter()
+        .map(|report| Series {
+            label: format!("{} time", report.method.name()),
+            style: SeriesStyle {
+                colour: method_colour(report.method),
+                width: 2,
+                dashed: false,
+                marker: None,
+            },
+            runs: runs(report.estimates.iter().map(|f| {
+                let ms = f.ms.as_ref().map(|t| t.0.total_ms);
+                (f.index as f64, ms)
+            })),
+        })
+        .collect();
+    let mut legend = draw_series_lines(&mut chart, &series)?;
+    legend.extend(draw_not_ok(&mut chart, reports, y.start)?);
     if with_legend {
         draw_legend(&legend_area, &legend, &[])?;
     }

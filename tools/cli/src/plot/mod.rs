@@ -1,9 +1,12 @@
 //! `slope-eval --plot DIR`: one PNG per recording, drawn with `plotters`:
 //! above, the per-frame slope of each method, the tracked slope (dashed)
 //! and the ground truth (grey line); below, each method's per-frame time.
+//! Lines break at frames without a value, and the frames that are not
+//! `ok` get an x at the bottom of each panel.
 //!
 //! One concern per file: `series.rs` (what is plotted and how each series
-//! looks, the notes on coinciding or empty series), `legend.rs` (the
+//! looks, its runs of frames with a value, the frames not `ok`, the notes
+//! on coinciding or empty series), `legend.rs` (the
 //! legend column beside each panel), `charts.rs` (the two panels); this
 //! file lays out the picture and its axes.
 

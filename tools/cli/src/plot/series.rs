@@ -1,8 +1,10 @@
 //! The plotted series: each method's per-frame and tracked slope and the
-//! truth, how each is drawn, and the notes on series that coincide or
-//! that have no `ok` frame.
+//! truth, how each is drawn (in runs of consecutive frames with a value,
+//! and the frames that are not `ok`), and the notes on series that
+//! coincide or that have no `ok` frame.
 
 use plotters::prelude::*;
+use slope_ipc_types::EstimateStatus;
 
 use super::*;
 
@@ -11,6 +13,7 @@ use super::*;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct SeriesStyle {
     pub(super) colour: RGBColor,
+    /// Line width, pixels; 0: no line (a marker only).
     pub(super) width: u32,
     pub(super) dashed: bool,
     pub(super) marker: Option<Marker>,
@@ -24,6 +27,8 @@ pub(super) enum Marker {
     Disc,
     HollowSquare,
     Triangle,
+    /// An x: a frame that is not `ok`.
+    Cross,
 }
 
 /// Dash and gap of the tracked slope's line, pixels.
@@ -44,7 +49,46 @@ pub(super) fn method_marker(method: slope_ipc_types::SlopeMethod) -> Marker {
 pub(super) struct Series {
     pub(super) label: String,
     pub(super) style: SeriesStyle,
-    pub(super) points: Vec<(f64, f64)>,
+    /// The points, in runs of consecutive frames with a value (see
+    /// [`runs`]): each run is a line of its own.
+    pub(super) runs: Vec<Vec<(f64, f64)>>,
+}
+
+impl Series {
+    /// Every point of every run, in frame order.
+    pub(super) fn points(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
+        self.runs.iter().flatten().copied()
+    }
+}
+
+/// `values` (frame, value if any) in runs of consecutive frames with a
+/// value: a frame without one ends a run, so that a line drawn per run
+/// never joins the frames on either side of a gap. A run may be one point.
+pub(super) fn runs(values: impl IntoIterator<Item = (f64, Option<f64>)>) -> Vec<Vec<(f64, f64)>> {
+    let mut out = Vec::new();
+    let mut run = Vec::new();
+    for (x, value) in values {
+        match value {
+            Some(y) => run.push((x, y)),
+            None if !run.is_empty() => out.push(std::mem::take(&mut run)),
+            None => {}
+        }
+    }
+    if !run.is_empty() {
+        out.push(run);
+    }
+    out
+}
+
+/// The frames of `report` whose status is not `ok` (a bad frame, no
+/// inclined plane, ...).
+pub(super) fn not_ok_frames(report: &MethodReport) -> Vec<f64> {
+    report
+        .estimates
+        .iter()
+        .filter(|f| f.status != EstimateStatus::Ok.name())
+        .map(|f| f.index as f64)
+        .collect()
 }
 
 /// The series of the slope panel, in drawing order: per method its
@@ -53,11 +97,12 @@ pub(super) fn slope_series(reports: &[MethodReport]) -> Vec<Series> {
     let mut out = Vec::new();
     for report in reports {
         let colour = method_colour(report.method);
-        let points: Vec<(f64, f64)> = report
-            .estimates
-            .iter()
-            .filter_map(|f| Some((f.index as f64, f.slope_deg?)))
-            .collect();
+        let points = runs(
+            report
+                .estimates
+                .iter()
+                .map(|f| (f.index as f64, f.slope_deg)),
+        );
         let label = if points.is_empty() {
             format!("{} (no ok frame)", report.method.name())
         } else {
@@ -71,13 +116,12 @@ pub(super) fn slope_series(reports: &[MethodReport]) -> Vec<Series> {
                 dashed: false,
                 marker: Some(method_marker(report.method)),
             },
-            points,
+            runs: points,
         });
-        let tracked: Vec<(f64, f64)> = report
-            .estimates
-            .iter()
-            .filter_map(|f| Some((f.index as f64, f.details.tracked.as_ref()?.slope_deg?)))
-            .collect();
+        let tracked = runs(report.estimates.iter().map(|f| {
+            let slope = f.details.tracked.as_ref().and_then(|t| t.slope_deg);
+            (f.index as f64, slope)
+        }));
         if !tracked.is_empty() {
             out.push(Series {
                 label: format!("{} tracked", report.method.name()),
@@ -87,7 +131,7 @@ pub(super) fn slope_series(reports: &[MethodReport]) -> Vec<Series> {
                     dashed: true,
                     marker: None,
                 },
-                points: tracked,
+                runs: tracked,
             });
         }
     }
@@ -103,11 +147,10 @@ pub(super) fn coincidence_notes(series: &[Series]) -> Vec<String> {
     for (i, a) in series.iter().enumerate() {
         for b in &series[i + 1..] {
             let same = a.style.dashed == b.style.dashed
-                && !a.points.is_empty()
-                && a.points.len() == b.points.len()
-                && a.points
-                    .iter()
-                    .zip(&b.points)
+                && a.points().next().is_some()
+                && a.points().count() == b.points().count()
+                && a.points()
+                    .zip(b.points())
                     .all(|(p, q)| (p.0 - q.0).abs() < 1e-9 && (p.1 - q.1).abs() <= SAME_DEG);
             if same {
                 notes.push(format!(
@@ -181,6 +224,13 @@ macro_rules! draw_markers {
                 $target,
                 $points
                     .map(|p| EmptyElement::at(p) + TriangleMarker::new((0, 0), 5, colour.filled())),
+            )
+            .map(|_| ())
+            .map_err(plot_error),
+            Marker::Cross => $draw(
+                $target,
+                $points
+                    .map(|p| EmptyElement::at(p) + Cross::new((0, 0), 4, colour.stroke_width(2))),
             )
             .map(|_| ())
             .map_err(plot_error),

@@ -257,3 +257,159 @@ fn notes_wrap_at_spaces() {
     );
     assert!(wrap("", fits).is_empty());
 }
+
+#[test]
+fn a_series_is_split_into_runs_at_frames_without_a_value() {
+    let at = |k: u32, y: Option<f64>| (f64::from(k), y);
+    let values = [
+        at(0, Some(1.0)),
+        at(1, Some(2.0)),
+        at(2, None),
+        at(3, Some(3.0)),
+        at(4, None),
+        at(5, None),
+        at(6, Some(4.0)),
+        at(7, Some(5.0)),
+    ];
+    assert_eq!(
+        runs(values),
+        [
+            vec![(0.0, 1.0), (1.0, 2.0)],
+            vec![(3.0, 3.0)],
+            vec![(6.0, 4.0), (7.0, 5.0)],
+        ]
+    );
+    // Gaps at either end open or close no run; no value, no run.
+    assert_eq!(
+        runs([at(0, None), at(1, Some(1.0)), at(2, None)]),
+        [vec![(1.0, 1.0)]]
+    );
+    assert!(runs([at(0, None), at(1, None)]).is_empty());
+    assert!(runs([]).is_empty());
+}
+
+/// Frames 0 to 4 at 16° and 20 ms, but frame 2: a bad frame (no slope,
+/// no time).
+fn report_with_a_bad_frame() -> MethodReport {
+    let frames = (0..5)
+        .map(|k| {
+            let mut f = frame(k, Some(16.0), None);
+            f.ms = Some(Timings(StageTimings {
+                total_ms: 20.0,
+                stages: Vec::new(),
+            }));
+            if k == 2 {
+                f.status = "bad_frame";
+                f.slope_deg = None;
+                f.ms = None;
+            }
+            f
+        })
+        .collect();
+    MethodReport::new("gap".into(), SlopeMethod::Paper, frames)
+}
+
+/// In `rows` of the chart (left of the legend column): the row with the
+/// most pixels of `colour` (the line), the widest run of other pixels
+/// between its first and last such pixel (the gap) and the middle of
+/// that run.
+fn line_gap(
+    image: &ColorImage,
+    rows: std::ops::Range<usize>,
+    colour: [u8; 3],
+) -> (usize, usize, usize) {
+    let column = PLOT_SIZE.0 as usize - LEGEND_WIDTH as usize;
+    let count = |y: usize| {
+        (0..column)
+            .filter(|&x| pixel(image, x, y) == colour)
+            .count()
+    };
+    let line = rows.max_by_key(|&y| count(y)).expect("rows");
+    let xs: Vec<usize> = (0..column)
+        .filter(|&x| pixel(image, x, line) == colour)
+        .collect();
+    let (gap, middle) = xs
+        .windows(2)
+        .map(|w| (w[1] - w[0] - 1, (w[0] + w[1]) / 2))
+        .max()
+        .unwrap_or((0, 0));
+    (line, gap, middle)
+}
+
+/// A frame that is not ok breaks the slope and time lines (they joined
+/// frame 1 to frame 3) and gets an x at the bottom of each panel.
+#[test]
+fn a_frame_that_is_not_ok_breaks_the_lines_and_is_marked() {
+    let reports = [report_with_a_bad_frame()];
+    let image = plot_recording("gap", &reports).expect("plot");
+    let paper = rgb(method_colour(SlopeMethod::Paper));
+    let panels = [
+        0..slope_panel_bottom(),
+        slope_panel_bottom()..PLOT_SIZE.1 as usize,
+    ];
+    for rows in panels {
+        let bottom = rows.end;
+        let (line, gap, middle) = line_gap(&image, rows.clone(), paper);
+        // About a frame's width (more than 100 pixels) without the line.
+        assert!(
+            gap > 100,
+            "rows {rows:?}: gap of {gap} pixels in row {line}"
+        );
+        // The x under frame 2, below the line.
+        let cross = (line + 5..bottom)
+            .flat_map(|y| (middle - 5..=middle + 5).map(move |x| (x, y)))
+            .filter(|&(x, y)| pixel(&image, x, y) == paper)
+            .count();
+        assert!(cross >= 8, "rows {rows:?}: {cross} pixels of the x");
+        // The legend's "not ok" sample: a grey x (nothing else in the
+        // samples' columns is that grey).
+        let x0 = PLOT_SIZE.0 as usize - LEGEND_WIDTH as usize + LEGEND_X as usize;
+        let sample = rows
+            .flat_map(|y| (x0..x0 + LEGEND_SAMPLE as usize).map(move |x| (x, y)))
+            .filter(|&(x, y)| pixel(&image, x, y) == rgb(NOTE_GREY))
+            .count();
+        assert!(sample >= 8, "{sample} pixels of the legend's x");
+    }
+}
+
+/// Times of 120 to 1200 ms: in each panel's y label area, the axis name
+/// and the tick labels are apart (a white column between them; at 56
+/// pixels "time per frame (ms)" was drawn over "120.0").
+#[test]
+fn the_y_axis_name_is_clear_of_the_tick_labels() {
+    let frames = [120.0, 1200.0, 600.0]
+        .iter()
+        .enumerate()
+        .map(|(k, &ms)| {
+            let mut f = frame(k as u64, Some(16.0 + k as f64), None);
+            f.ms = Some(Timings(StageTimings {
+                total_ms: ms,
+                stages: Vec::new(),
+            }));
+            f
+        })
+        .collect();
+    let reports = [MethodReport::new("slow".into(), SlopeMethod::Paper, frames)];
+    let image = plot_recording("slow", &reports).expect("plot");
+    // Left of the axis line (the chart's margin is 12 pixels), above the
+    // x tick labels.
+    let columns = 0..12 + Y_LABEL_AREA as usize - 1;
+    let bottom = slope_panel_bottom();
+    for rows in [20..bottom - 60, bottom + 10..PLOT_SIZE.1 as usize - 60] {
+        let dark: Vec<bool> = columns
+            .clone()
+            .map(|x| {
+                rows.clone()
+                    .any(|y| pixel(&image, x, y).iter().all(|&c| c < 128))
+            })
+            .collect();
+        // The first run of dark columns is the axis name (15 px text on
+        // its side), then white columns, then the tick labels.
+        let text: String = dark.iter().map(|&d| if d { '#' } else { '.' }).collect();
+        let name_start = text.find('#').expect("an axis name");
+        let name_end = name_start + text[name_start..].find('.').expect("a gap");
+        let labels_start = name_end + text[name_end..].find('#').expect("tick labels");
+        assert!(name_end - name_start <= 20, "rows {rows:?}: {text}");
+        assert!(labels_start - name_end >= 3, "rows {rows:?}: {text}");
+    }
+}
