@@ -141,7 +141,7 @@ fn values_out_of_range_are_named_with_their_range() {
         (
             "[estimator.normals]\nneighbours = 2\n",
             "`estimator.normals.neighbours` = 2",
-            "must be at least 3",
+            "must be in 3..=1000",
         ),
         (
             "[estimator.ransac]\nconfidence = 1.5\n",
