@@ -14,8 +14,8 @@ use common::{angle_deg, fit_plane, frame, scene_fixture, world_point, write_and_
 use nalgebra::Vector3;
 use slope_sensor::error_chain::ErrorChain;
 use slope_synth::{
-    parse_scene, raycast, BoxFace, Camera, CameraPose, MountPose, Panel, Ramp, Scene, SensorModel,
-    Surface, SurfaceKind, Table, World,
+    parse_scene, raycast, BoxFace, Camera, CameraPose, GeometryImage, MountPose, Panel, Ramp,
+    Scene, SensorModel, Surface, SurfaceKind, Table, World,
 };
 
 const SEED: u64 = 5;
@@ -42,6 +42,15 @@ fn clean_frame(scene: &Scene) -> Frame {
     let model = SensorModel::clean();
     let rec = write_and_open(scene, &model, 1, SEED, dir.path());
     frame(&rec, scene, &model, SEED, 0)
+}
+
+/// True when every pixel within `margin` of (u, v) sees `surface` (no depth
+/// edge nearby: no flying or mixed pixels).
+fn interior(geometry: &GeometryImage, u: u32, v: u32, surface: Surface, margin: u32) -> bool {
+    let (u0, v0) = (u.saturating_sub(margin), v.saturating_sub(margin));
+    (v0..=v + margin).all(|nv| {
+        (u0..=u + margin).all(|nu| geometry.get(nu, nv).is_some_and(|o| o.surface == surface))
+    })
 }
 
 /// A panel's plane and rectangle, computed here from its keys (not with
@@ -227,7 +236,7 @@ fn sloped_table_top_fits_its_tilted_plane() {
         let f = frame(&rec, &scene, &model, SEED, 0);
         let points: Vec<_> = (0..f.depth.height)
             .flat_map(|v| (0..f.depth.width).map(move |u| (u, v)))
-            .filter(|&(u, v)| f.geometry.get(u, v).is_some_and(|h| h.surface == top))
+            .filter(|&(u, v)| interior(&f.geometry, u, v, top, 2))
             .filter_map(|(u, v)| {
                 let raw = f.depth.get(u, v).unwrap_or(0);
                 (raw != 0).then(|| world_point(&f.camera, u, v, f64::from(raw) * 1e-3))
