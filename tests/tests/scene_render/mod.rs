@@ -8,7 +8,7 @@
 use std::path::Path;
 
 use slope_ipc_types::CloudPoint;
-use slope_pipeline::{Estimate, EstimateStatus, Estimator, EstimatorConfig, FrameInfo};
+use slope_pipeline::{Estimate, Estimator, EstimatorConfig, FrameInfo};
 use slope_sensor::recording::Recording;
 use slope_synth::{parse_scene, write_recording};
 
