@@ -18,9 +18,10 @@
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+use std::time::Duration;
 
 use serde_json::{json, Value};
-use slope_integration_tests::{binary, recording, repo_root};
+use slope_integration_tests::{binary, recording, replay_frames, repo_root, unique_prefix, Proc};
 use slope_ipc_types::layout;
 use slope_sensor::recording::Recording;
 
@@ -488,4 +489,137 @@ fn bad_bags_are_refused_with_a_clear_error() {
             );
         }
     }
+}
+
+/// `slope-record --format rosbag2` beside a running chain (replay ->
+/// estimator): rosbags reads a depth image and a camera info per recorded
+/// cloud (the recording's depth), the mount on /tf_static, and one
+/// estimate per frame estimated, each at its frame's capture stamp.
+#[test]
+fn a_rosbag2_recording_of_the_chain_reads_back_with_rosbags() {
+    let Some(python) = rosbags_python() else {
+        return;
+    };
+    let prefix = unique_prefix("record-rosbag2");
+    let tmp = tempfile::tempdir().expect("temp dir");
+    let bag = tmp.path().join("run");
+    let _estimator = Proc::spawn("slope-estimator", ["--service-prefix", &prefix])
+        .assert_ready("estimator ready");
+    let mut record = Proc::spawn(
+        "slope-record",
+        [
+            bag.to_str().expect("utf-8 path"),
+            "--format",
+            "rosbag2",
+            "--service-prefix",
+            &prefix,
+            "--idle-timeout-s",
+            "2",
+        ],
+    )
+    .assert_ready("recording the cloud topic");
+    let frames = 6usize;
+    let mut replay = replay_frames(&prefix, "ramp16", 4.0, frames as u64, 2);
+    replay.assert_exits_zero_within(Duration::from_secs(60));
+    record.assert_exits_zero_within(Duration::from_secs(30));
+
+    let msg_file = repo_root().join("ros2/slope_msgs/msg/SlopeEstimate.msg");
+    let read: Value = serde_json::from_str(&ros_bags(
+        &python,
+        &["read".as_ref(), &bag, tmp.path(), &msg_file],
+    ))
+    .expect("JSON from ros_bags.py");
+    let depth = read["depth"].as_array().expect("depth");
+    assert_eq!(depth.len(), frames, "{}", read["topics"]);
+    assert_eq!(read["camera_info"].as_array().map(Vec::len), Some(frames));
+    let rec = Recording::open(&recording("ramp16")).expect("ramp16");
+    for i in 0..frames {
+        let raw = std::fs::read(tmp.path().join(format!("depth-{i}.raw"))).expect("raw depth");
+        let mm: Vec<u16> = raw
+            .chunks_exact(2)
+            .map(|b| u16::from_le_bytes([b[0], b[1]]))
+            .collect();
+        assert_eq!(mm, depth_of(&rec, i), "frame {i}");
+    }
+    let transform = &read["tf_static"][0]["transforms"][0];
+    assert_eq!(transform["transform"]["translation"]["z"], 0.5);
+    // One estimate per frame (the estimator may supersede a frame on a
+    // loaded machine: it then counts it), each at a recorded frame's stamp.
+    let estimates = read["estimates"].as_array().expect("estimates");
+    let dropped = estimates
+        .last()
+        .and_then(|e| e["dropped_frames"].as_u64())
+        .unwrap_or(0);
+    assert_eq!(
+        estimates.len() as u64 + dropped,
+        frames as u64,
+        "{estimates:?}"
+    );
+    let stamps: Vec<&Value> = depth.iter().map(|d| &d["stamp"]).collect();
+    for e in estimates {
+        assert_eq!(e["status"], 0, "{e}");
+        assert!(
+            (e["slope_deg"].as_f64().expect("slope") - 16.0).abs() < 0.5,
+            "{e}"
+        );
+        let stamp = json!([e["header"]["stamp"]["sec"], e["header"]["stamp"]["nanosec"]]);
+        assert!(stamps.contains(&&stamp), "{e}");
+    }
+    assert_eq!(read["schema_fields"], read["msg_file_fields"]);
+}
+
+/// Our own export imports back (no Python needed): `slope-convert
+/// --format rosbag2` then `slope-import` gives ramp16's depth, stamps,
+/// intrinsics and mount (from the /tf_static the export wrote).
+#[test]
+fn a_converted_bag_imports_back_to_the_recording() {
+    let tmp = tempfile::tempdir().expect("temp dir");
+    let source = recording("ramp16");
+    let bag = tmp.path().join("bag");
+    let out = tmp.path().join("back");
+    let frames = FRAMES.to_string();
+    run_ok(
+        "slope-convert",
+        &[
+            source.as_os_str(),
+            "-o".as_ref(),
+            bag.as_os_str(),
+            "--format".as_ref(),
+            "rosbag2".as_ref(),
+            "--no-estimates".as_ref(),
+            "--max-frames".as_ref(),
+            frames.as_ref(),
+        ],
+    );
+    run_ok(
+        "slope-import",
+        &[bag.as_os_str(), "-o".as_ref(), out.as_os_str()],
+    );
+    let original = Recording::open(&source).expect("ramp16");
+    let back = Recording::open(&out).expect("the imported recording");
+    assert_eq!(back.meta().depth, original.meta().depth);
+    assert_eq!(back.meta().mount, original.meta().mount);
+    assert_eq!(back.frames().len(), FRAMES);
+    for i in 0..FRAMES {
+        assert_eq!(
+            back.frames()[i].timestamp_ns,
+            original.frames()[i].timestamp_ns
+        );
+        assert_eq!(depth_of(&back, i), depth_of(&original, i), "frame {i}");
+    }
+    // --list names the topics an import takes.
+    let listed = run_ok("slope-import", &[bag.as_os_str(), "--list".as_ref()]);
+    let text = String::from_utf8_lossy(&listed.stdout);
+    assert!(
+        text.contains("/slope/depth") && text.contains("<- depth"),
+        "{text}"
+    );
+    assert!(
+        text.contains("/slope/camera_info") && text.contains("<- camera info"),
+        "{text}"
+    );
+    assert!(
+        text.contains("/tf_static") && text.contains("<- mount"),
+        "{text}"
+    );
 }

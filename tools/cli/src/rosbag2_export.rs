@@ -12,7 +12,7 @@
 //! | `/tf_static` | `tf2_msgs/msg/TFMessage`: `base_link` to `slope_camera` | once, when the mount's height and pitch are known |
 //!
 //! Each message is logged at its frame's capture stamp. `metadata.yaml`
-//! (version 5, which every ROS 2 release from Humble on reads) is written
+//! (version 5, Humble's; later releases read it too) is written
 //! when the bag is finished; a bag cut short (a crash of `slope-record`)
 //! holds its MCAP file without it (`ros2 bag reindex` makes it again).
 
