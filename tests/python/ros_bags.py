@@ -8,6 +8,7 @@ FRAMES_JSON (written by the test): width, height, fx, fy, cx, cy, base_frame,
 camera_frame, transform ([x, y, z], [qx, qy, qz, qw]) or null, depth_encoding
 (16UC1 | 32FC1 | compressedDepth), stamps_ns, depth_raw (files of little-endian
 uint16 millimetres) and depth_png (the recording's PNGs, for compressedDepth), and
+color_raw (files of RGB bytes: a registered colour stream, color_encoding rgb8 or bgr8),
 optional extras: no_camera_info (the topic without messages), zero_size (0 x 0
 images).
 """
@@ -65,6 +66,16 @@ def depth_message(store, fmt, spec, index, hdr):
     msg = store.types['sensor_msgs/msg/Image'](
         header=hdr, height=height, width=width, encoding=enc, is_bigendian=0, step=step, data=data)
     return 'sensor_msgs/msg/Image', msg
+
+
+def color_message(store, spec, index, hdr):
+    rgb = np.fromfile(spec['color_raw'][index], dtype=np.uint8)
+    enc = spec.get('color_encoding', 'rgb8')
+    if enc == 'bgr8':
+        rgb = rgb.reshape(-1, 3)[:, ::-1].copy().reshape(-1)
+    return store.types['sensor_msgs/msg/Image'](
+        header=hdr, height=spec['height'], width=spec['width'], encoding=enc, is_bigendian=0,
+        step=spec['width'] * 3, data=rgb)
 
 
 def camera_info(store, fmt, spec, hdr):
@@ -129,6 +140,9 @@ def write(fmt, spec_path, bag):
                         info_topic, 'sensor_msgs/msg/CameraInfo', typestore=store)
             else:
                 put(info_topic, 'sensor_msgs/msg/CameraInfo', camera_info(store, fmt, spec, hdr), stamp)
+            if spec.get('color_raw'):
+                put('/kinect2/sd/image_color_rect', 'sensor_msgs/msg/Image',
+                    color_message(store, spec, index, hdr), stamp)
 
 
 def fields_of(text, name):

@@ -313,7 +313,15 @@ fn bag_spec(dir: &Path, encoding: &str, extra: Value) -> PathBuf {
     let mut raw = Vec::new();
     let mut png = Vec::new();
     let mut stamps = Vec::new();
+    let mut color = Vec::new();
     for i in 0..FRAMES {
+        let rgb = rec
+            .read_color(&rec.frames()[i])
+            .expect("colour")
+            .expect("ramp16 has colour");
+        let path = dir.join(format!("frame-{i}.rgb"));
+        std::fs::write(&path, rgb.data.concat()).expect("raw colour");
+        color.push(path);
         let path = dir.join(format!("frame-{i}.u16"));
         let bytes: Vec<u8> = depth_of(&rec, i)
             .iter()
@@ -342,7 +350,7 @@ fn bag_spec(dir: &Path, encoding: &str, extra: Value) -> PathBuf {
         "base_frame": "base_link", "camera_frame": "kinect2_ir_optical_frame",
         "transform": [[0.0, 0.0, meta.mount.height_m], q],
         "depth_encoding": encoding, "stamps_ns": stamps,
-        "depth_raw": raw, "depth_png": png,
+        "depth_raw": raw, "depth_png": png, "color_raw": color,
     });
     if let (Some(spec), Some(extra)) = (spec.as_object_mut(), extra.as_object()) {
         spec.extend(extra.clone());
@@ -365,13 +373,19 @@ fn make_bag(python: &Path, dir: &Path, format: &str, encoding: &str, extra: Valu
 }
 
 /// Imports a bag that rosbags wrote from ramp16 and checks it against
-/// ramp16: depth, intrinsics, mount, stamps and slope-eval's answers.
-fn imports_to_the_original(format: &str, encoding: &str) {
+/// ramp16: depth, intrinsics, mount, stamps, slope-eval's answers and,
+/// with a `color` encoding, the registered colour (else none: the bag
+/// has no colour topic).
+fn imports_to_the_original(format: &str, encoding: &str, color: Option<&str>) {
     let Some(python) = rosbags_python() else {
         return;
     };
     let tmp = tempfile::tempdir().expect("temp dir");
-    let bag = make_bag(&python, tmp.path(), format, encoding, json!({}));
+    let extra = match color {
+        Some(color) => json!({"color_encoding": color}),
+        None => json!({"color_raw": null}),
+    };
+    let bag = make_bag(&python, tmp.path(), format, encoding, extra);
     let out = tmp.path().join("imported");
     run_ok(
         "slope-import",
@@ -395,6 +409,15 @@ fn imports_to_the_original(format: &str, encoding: &str) {
             imported.frames()[i].timestamp_ns,
             EPOCH_NS + original.frames()[i].timestamp_ns
         );
+        let frame = &imported.frames()[i];
+        match color {
+            Some(_) => assert_eq!(
+                imported.read_color(frame).expect("colour"),
+                original.read_color(&original.frames()[i]).expect("colour"),
+                "frame {i}"
+            ),
+            None => assert_eq!(frame.color, None),
+        }
     }
     assert_eq!(
         answers(&eval_estimates(&out)),
@@ -403,18 +426,18 @@ fn imports_to_the_original(format: &str, encoding: &str) {
 }
 
 #[test]
-fn a_ros1_bag_of_16uc1_images_imports_to_the_original() {
-    imports_to_the_original("ros1", "16UC1");
+fn a_ros1_bag_of_16uc1_and_rgb8_images_imports_to_the_original() {
+    imports_to_the_original("ros1", "16UC1", Some("rgb8"));
 }
 
 #[test]
-fn a_ros2_mcap_bag_of_32fc1_images_imports_to_the_original() {
-    imports_to_the_original("ros2-mcap", "32FC1");
+fn a_ros2_mcap_bag_of_32fc1_and_bgr8_images_imports_to_the_original() {
+    imports_to_the_original("ros2-mcap", "32FC1", Some("bgr8"));
 }
 
 #[test]
 fn a_ros2_sqlite_bag_of_compressed_depth_imports_to_the_original() {
-    imports_to_the_original("ros2-sqlite", "compressedDepth");
+    imports_to_the_original("ros2-sqlite", "compressedDepth", None);
 }
 
 /// Runs slope-import on `bag`; asserts a failure (status 1, no panic)

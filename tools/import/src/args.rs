@@ -65,6 +65,16 @@ pub struct ImportArgs {
     #[arg(long, value_name = "TOPIC")]
     pub info_topic: Option<String>,
 
+    /// The registered colour images (sensor_msgs/Image rgb8 or bgr8 of the
+    /// depth image's size, the same stamps); default: the one image topic
+    /// beside the depth topic named for colour (color, rgb), if there is one.
+    #[arg(long, value_name = "TOPIC", conflicts_with = "no_color")]
+    pub color_topic: Option<String>,
+
+    /// Import no colour.
+    #[arg(long)]
+    pub no_color: bool,
+
     /// The robot's frame in /tf_static that the camera's mount is measured
     /// from (its z axis up, its origin on the ground).
     #[arg(long, value_name = "FRAME", default_value = "base_link")]
@@ -93,6 +103,18 @@ pub struct ImportArgs {
 
     #[command(flatten)]
     pub log: LogArgs,
+}
+
+impl ImportArgs {
+    /// The topics the command line asks for.
+    pub fn wanted(&self) -> crate::topics::Wanted<'_> {
+        crate::topics::Wanted {
+            depth: self.depth_topic.as_deref(),
+            info: self.info_topic.as_deref(),
+            color: self.color_topic.as_deref(),
+            no_color: self.no_color,
+        }
+    }
 }
 
 fn seconds(text: &str) -> Result<f64, String> {

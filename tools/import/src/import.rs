@@ -13,12 +13,13 @@ use anyhow::{bail, Context};
 use indicatif::ProgressBar;
 use slope_sensor::publish::StopFlag;
 use slope_sensor::recording::{
-    DepthImage, DepthInfo, MountInfo, RecordingMeta, RecordingWriter, TruthInfo,
+    ColorImage, DepthImage, DepthInfo, MountInfo, RecordingMeta, RecordingWriter, TruthInfo,
 };
 use slope_tools::ros2_messages::{CameraInfo, CompressedImage, Header, Image, TfMessage};
 
 use crate::args::ImportArgs;
 use crate::bag::{BagMessage, Serialization, Truncated};
+use crate::color::{image_to_color, WaitingColors, MAX_DEPTH_WAIT};
 use crate::depth::{compressed_to_depth, image_to_depth, UNIT_M};
 use crate::messages::Decode;
 use crate::mount::StaticTransforms;
@@ -37,6 +38,8 @@ pub struct ImportStats {
     pub written: u64,
     /// Depth images read from the bag (before --start/--duration/--every).
     pub depth_messages: u64,
+    /// Frames written with a colour image.
+    pub with_color: u64,
     /// Depth images skipped: unreadable, or stamped before the one before.
     pub skipped: u64,
     /// Set when a signal stopped the import.
@@ -53,7 +56,11 @@ pub struct Importer<'a> {
     info: Option<DepthInfo>,
     transforms: StaticTransforms,
     camera_frame: Option<String>,
-    pending: Vec<(u64, DepthImage)>,
+    /// Depth images held back (stamp, depth, its colour once found).
+    pending: Vec<(u64, DepthImage, Option<ColorImage>)>,
+    colors: WaitingColors,
+    /// Set once the colour topic turned out unusable (warned once).
+    color_failed: bool,
     writer: Option<RecordingWriter>,
     first_stamp_ns: Option<u64>,
     last_stamp_ns: Option<u64>,
@@ -86,6 +93,8 @@ impl<'a> Importer<'a> {
             transforms: StaticTransforms::default(),
             camera_frame: None,
             pending: Vec::new(),
+            colors: WaitingColors::default(),
+            color_failed: false,
             writer: None,
             first_stamp_ns: None,
             last_stamp_ns: None,
@@ -107,6 +116,9 @@ impl<'a> Importer<'a> {
         } else if message.topic == self.chosen.info {
             self.on_camera_info(message.data)
                 .map(|()| ControlFlow::Continue(()))
+        } else if Some(message.topic) == self.chosen.color.as_deref() {
+            self.on_color(message.data);
+            Ok(ControlFlow::Continue(()))
         } else if message.topic == self.chosen.depth {
             self.progress.inc(1);
             self.on_depth(message)
@@ -130,6 +142,50 @@ impl<'a> Importer<'a> {
                 self.chosen.tf_static.as_deref().unwrap_or("")
             ),
         }
+    }
+
+    /// A colour image: given to the depth image of its stamp, or kept for
+    /// it. One that cannot be used ends the colour stream (a warning).
+    fn on_color(&mut self, data: &[u8]) {
+        if self.color_failed {
+            return;
+        }
+        let topic = self.chosen.color.as_deref().unwrap_or("");
+        let decoded = Image::decode(data, self.serialization)
+            .map_err(|e| e.to_string())
+            .and_then(|image| {
+                let stamp = stamp_ns(&image.header);
+                image_to_color(&image).map(|color| (stamp, color))
+            });
+        let (stamp, color) = match decoded {
+            Ok((Some(stamp), color)) => (stamp, color),
+            Ok((None, _)) => {
+                return self.give_up_color(topic, "its images have no stamp to match".to_string())
+            }
+            Err(why) => return self.give_up_color(topic, why),
+        };
+        if let Some(info) = self.info {
+            if (color.width, color.height) != (info.width, info.height) {
+                let why = format!(
+                    "its images are {} x {}, the depth images {} x {}: not registered to them",
+                    color.width, color.height, info.width, info.height
+                );
+                return self.give_up_color(topic, why);
+            }
+        }
+        match self
+            .pending
+            .iter_mut()
+            .find(|(s, _, c)| *s == stamp && c.is_none())
+        {
+            Some((_, _, slot)) => *slot = Some(color),
+            None => self.colors.push(stamp, color),
+        }
+    }
+
+    fn give_up_color(&mut self, topic: &str, why: String) {
+        tracing::warn!("{topic}: {why}; importing without colour (--no-color to say so)");
+        self.color_failed = true;
     }
 
     /// The first camera info gives the intrinsics.
@@ -242,7 +298,8 @@ impl<'a> Importer<'a> {
         self.last_stamp_ns = Some(stamp);
         self.camera_frame
             .get_or_insert_with(|| header.frame_id.clone());
-        self.pending.push((stamp, depth));
+        let color = self.colors.take(stamp);
+        self.pending.push((stamp, depth, color));
         Ok(ControlFlow::Continue(()))
     }
 
@@ -321,11 +378,11 @@ impl<'a> Importer<'a> {
             }
             self.create(info)?;
         }
-        self.write_pending()
+        self.write_pending(false)
     }
 
     fn create(&mut self, info: DepthInfo) -> anyhow::Result<()> {
-        if let Some((_, depth)) = self.pending.first() {
+        if let Some((_, depth, _)) = self.pending.first() {
             if (depth.width, depth.height) != (info.width, info.height) {
                 bail!(
                     "the depth images of {} are {} x {}, but {} says {} x {}: choose the camera \
@@ -351,13 +408,22 @@ impl<'a> Importer<'a> {
         Ok(())
     }
 
-    fn write_pending(&mut self) -> anyhow::Result<()> {
+    /// Writes the frames held back, oldest first; one still waiting for
+    /// its colour image stays (unless `all`, or [`MAX_DEPTH_WAIT`] newer
+    /// depth images wait behind it).
+    fn write_pending(&mut self, all: bool) -> anyhow::Result<()> {
         let Some(writer) = self.writer.as_mut() else {
             return Ok(());
         };
-        for (stamp, depth) in self.pending.drain(..) {
+        let colour = self.chosen.color.is_some() && !self.color_failed;
+        while let Some((_, _, color)) = self.pending.first() {
+            if colour && color.is_none() && !all && self.pending.len() <= MAX_DEPTH_WAIT {
+                break;
+            }
+            let (stamp, depth, color) = self.pending.remove(0);
+            self.stats.with_color += u64::from(color.is_some());
             writer
-                .write_frame(stamp, &depth, None, None)
+                .write_frame(stamp, &depth, color.as_ref(), None)
                 .with_context(|| {
                     format!(
                         "cannot write frame {} of {} (its image is {} x {}; the camera info says \
@@ -387,7 +453,7 @@ impl<'a> Importer<'a> {
                 self.create(info)?;
             }
         }
-        self.write_pending()?;
+        self.write_pending(true)?;
         let Some(writer) = self.writer.take() else {
             return Err(self.nothing_read(truncated));
         };

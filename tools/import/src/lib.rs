@@ -9,12 +9,14 @@
 //! | `messages.rs` | decoding the messages read (CDR, ROS 1) |
 //! | `topics.rs` | which topics are the depth images, the camera info, `/tf_static` |
 //! | `depth.rs` | depth images as millimetres (16UC1, 32FC1, compressedDepth) |
+//! | `color.rs` | the registered colour images, matched by stamp |
 //! | `mount.rs` | the mount from `/tf_static` |
 //! | `import.rs` | the import's one pass over the bag |
 //! | `list.rs` | `--list` |
 
 mod args;
 pub mod bag;
+pub mod color;
 pub mod depth;
 mod import;
 mod list;
@@ -45,14 +47,11 @@ pub fn run(args: &ImportArgs, stop: &StopFlag) -> anyhow::Result<()> {
         anyhow::bail!("an output directory is required: give it as -o DIR");
     };
     let existed = check_output(out)?;
-    let chosen = topics::choose(
-        &topics,
-        args.depth_topic.as_deref(),
-        args.info_topic.as_deref(),
-    )?;
+    let chosen = topics::choose(&topics, &args.wanted())?;
     tracing::info!(
         depth = chosen.depth,
         info = chosen.info,
+        color = chosen.color.as_deref().unwrap_or("-"),
         tf_static = chosen.tf_static.as_deref().unwrap_or("-"),
         "importing {}",
         args.bag.display()
@@ -76,6 +75,7 @@ pub fn run(args: &ImportArgs, stop: &StopFlag) -> anyhow::Result<()> {
             tracing::info!(
                 frames = stats.written,
                 depth_images = stats.depth_messages,
+                with_color = stats.with_color,
                 skipped = stats.skipped,
                 out = %out.display(),
                 "imported"

@@ -13,11 +13,7 @@ use crate::topics::choose;
 /// Prints the topics of `bag` on stdout; the choice an import would make,
 /// or why it could not, under them.
 pub fn print(bag: &Path, topics: &[TopicInfo], args: &ImportArgs) -> anyhow::Result<()> {
-    let chosen = choose(
-        topics,
-        args.depth_topic.as_deref(),
-        args.info_topic.as_deref(),
-    );
+    let chosen = choose(topics, &args.wanted());
     let width = topics
         .iter()
         .map(|t| t.name.len())
@@ -42,6 +38,7 @@ pub fn print(bag: &Path, topics: &[TopicInfo], args: &ImportArgs) -> anyhow::Res
         let role = match &chosen {
             Ok(c) if c.depth == topic.name => "  <- depth",
             Ok(c) if c.info == topic.name => "  <- camera info",
+            Ok(c) if c.color.as_deref() == Some(topic.name.as_str()) => "  <- colour",
             Ok(c) if c.tf_static.as_deref() == Some(topic.name.as_str()) => "  <- mount",
             _ => "",
         };

@@ -1,6 +1,6 @@
-//! Which topics an import reads: the depth images, their camera info and
-//! `/tf_static`, by type (and name), or as `--depth-topic` and
-//! `--info-topic` say.
+//! Which topics an import reads: the depth images, their camera info,
+//! the registered colour images and `/tf_static`, by type (and name), or
+//! as `--depth-topic`, `--info-topic` and `--color-topic` say.
 
 use crate::bag::TopicInfo;
 
@@ -25,8 +25,21 @@ pub struct Chosen {
     pub depth: String,
     pub kind: DepthKind,
     pub info: String,
+    /// The registered colour images (`sensor_msgs/Image` of the depth
+    /// image's size), when there are.
+    pub color: Option<String>,
     /// `/tf_static`, when the bag has it as `tf2_msgs/TFMessage`.
     pub tf_static: Option<String>,
+}
+
+/// The topics asked for on the command line.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Wanted<'a> {
+    pub depth: Option<&'a str>,
+    pub info: Option<&'a str>,
+    pub color: Option<&'a str>,
+    /// `--no-color`: no colour topic, not even one named.
+    pub no_color: bool,
 }
 
 /// Why no topics could be chosen.
@@ -46,6 +59,8 @@ pub enum TopicError {
     SeveralInfo(String),
     #[error("--info-topic {topic}: {reason}")]
     BadInfo { topic: String, reason: String },
+    #[error("--color-topic {topic}: {reason}")]
+    BadColor { topic: String, reason: String },
 }
 
 fn names(topics: &[&TopicInfo]) -> String {
@@ -166,14 +181,53 @@ fn choose_info(
     }
 }
 
-/// The topics an import of a bag with `topics` reads.
-pub fn choose(
+/// The colour topic: `--color-topic`, else the one uncompressed image
+/// topic beside the depth topic whose name says colour (`color`, `rgb`);
+/// none with `--no-color` or when there is not exactly one.
+fn choose_color(
     topics: &[TopicInfo],
-    depth: Option<&str>,
-    info: Option<&str>,
-) -> Result<Chosen, TopicError> {
-    let (depth, kind) = choose_depth(topics, depth)?;
-    let info = choose_info(topics, info, &depth)?;
+    wanted: &Wanted<'_>,
+    depth: &str,
+) -> Result<Option<String>, TopicError> {
+    if wanted.no_color {
+        return Ok(None);
+    }
+    if let Some(name) = wanted.color {
+        let topic = topics
+            .iter()
+            .find(|t| t.name == name)
+            .ok_or_else(|| TopicError::BadColor {
+                topic: name.to_string(),
+                reason: "not in the bag (--list shows its topics)".to_string(),
+            })?;
+        if kind_of(topic) != Some(DepthKind::Raw) {
+            return Err(TopicError::BadColor {
+                topic: name.to_string(),
+                reason: format!("its type is {}, not {IMAGE}", topic.message_type),
+            });
+        }
+        return Ok(Some(topic.name.clone()));
+    }
+    let colour: Vec<&TopicInfo> = topics
+        .iter()
+        .filter(|t| t.name != depth && kind_of(t) == Some(DepthKind::Raw))
+        .filter(|t| namespace(&t.name) == namespace(depth))
+        .filter(|t| {
+            let name = t.name.to_ascii_lowercase();
+            name.contains("color") || name.contains("colour") || name.contains("rgb")
+        })
+        .collect();
+    Ok(match colour.as_slice() {
+        [one] => Some(one.name.clone()),
+        _ => None,
+    })
+}
+
+/// The topics an import of a bag with `topics` reads.
+pub fn choose(topics: &[TopicInfo], wanted: &Wanted<'_>) -> Result<Chosen, TopicError> {
+    let (depth, kind) = choose_depth(topics, wanted.depth)?;
+    let info = choose_info(topics, wanted.info, &depth)?;
+    let color = choose_color(topics, wanted, &depth)?;
     let tf_static = topics
         .iter()
         .find(|t| t.name == TF_STATIC && t.plain_type() == TF_MESSAGE)
@@ -182,6 +236,7 @@ pub fn choose(
         depth,
         kind,
         info,
+        color,
         tf_static,
     })
 }
@@ -214,17 +269,22 @@ mod tests {
 
     #[test]
     fn a_kinect2_bridge_bag_gives_the_sd_depth_and_its_camera_info() {
-        let chosen = choose(&kinect2_bridge(), None, None).unwrap();
+        let chosen = choose(&kinect2_bridge(), &Wanted::default()).unwrap();
         assert_eq!(chosen.depth, "/kinect2/sd/image_depth_rect");
+        assert_eq!(
+            chosen.color.as_deref(),
+            Some("/kinect2/sd/image_color_rect")
+        );
         assert_eq!(chosen.kind, DepthKind::Raw);
         assert_eq!(chosen.info, "/kinect2/sd/camera_info");
         assert_eq!(chosen.tf_static.as_deref(), Some("/tf_static"));
-        let compressed = choose(
-            &kinect2_bridge(),
-            Some("/kinect2/sd/image_depth_rect/compressed"),
-            None,
-        )
-        .unwrap();
+        let wanted = Wanted {
+            depth: Some("/kinect2/sd/image_depth_rect/compressed"),
+            no_color: true,
+            ..Wanted::default()
+        };
+        let compressed = choose(&kinect2_bridge(), &wanted).unwrap();
+        assert_eq!(compressed.color, None);
         assert_eq!(compressed.kind, DepthKind::Compressed);
         assert_eq!(compressed.info, "/kinect2/sd/camera_info");
     }
@@ -235,8 +295,9 @@ mod tests {
             topic("/camera/depth/image_raw", "sensor_msgs/msg/Image"),
             topic("/camera/depth/camera_info", "sensor_msgs/msg/CameraInfo"),
         ];
-        let chosen = choose(&topics, None, None).unwrap();
+        let chosen = choose(&topics, &Wanted::default()).unwrap();
         assert_eq!(chosen.depth, "/camera/depth/image_raw");
+        assert_eq!(chosen.color, None);
         assert_eq!(chosen.tf_static, None);
     }
 
@@ -247,7 +308,7 @@ mod tests {
             topic("/info", "sensor_msgs/CameraInfo"),
         ];
         assert_eq!(
-            choose(&colour, None, None),
+            choose(&colour, &Wanted::default()),
             Err(TopicError::NoDepth("/rgb (sensor_msgs/Image)".to_string()))
         );
         let two = vec![
@@ -255,12 +316,19 @@ mod tests {
             topic("/b/depth", "sensor_msgs/Image"),
         ];
         assert!(matches!(
-            choose(&two, None, None),
+            choose(&two, &Wanted::default()),
             Err(TopicError::SeveralDepth(_))
         ));
         let no_info = vec![topic("/a/depth", "sensor_msgs/Image")];
-        assert_eq!(choose(&no_info, None, None), Err(TopicError::NoInfo));
-        let err = choose(&kinect2_bridge(), Some("/kinect2/sd/camera_info"), None).unwrap_err();
+        assert_eq!(
+            choose(&no_info, &Wanted::default()),
+            Err(TopicError::NoInfo)
+        );
+        let wanted = Wanted {
+            depth: Some("/kinect2/sd/camera_info"),
+            ..Wanted::default()
+        };
+        let err = choose(&kinect2_bridge(), &wanted).unwrap_err();
         assert!(err.to_string().contains("not sensor_msgs/Image"), "{err}");
     }
 }
