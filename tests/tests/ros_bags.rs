@@ -630,6 +630,32 @@ fn a_converted_bag_imports_back_to_the_recording() {
         );
         assert_eq!(depth_of(&back, i), depth_of(&original, i), "frame {i}");
     }
+    // --start 0.1 --duration 0.1 --every 2: of the frames stamped 0.1 to
+    // 0.2 s after the first (frames 4, 5 and 6: 133, 167 and 200 ms less a
+    // nanosecond), every second one.
+    let cut = tmp.path().join("cut");
+    run_ok(
+        "slope-import",
+        &[
+            bag.as_os_str(),
+            "-o".as_ref(),
+            cut.as_os_str(),
+            "--start".as_ref(),
+            "0.1".as_ref(),
+            "--duration".as_ref(),
+            "0.1".as_ref(),
+            "--every".as_ref(),
+            "2".as_ref(),
+        ],
+    );
+    let cut = Recording::open(&cut).expect("the cut recording");
+    let stamps: Vec<u64> = cut.frames().iter().map(|f| f.timestamp_ns).collect();
+    let expected: Vec<u64> = [4, 6]
+        .iter()
+        .map(|&i| original.frames()[i].timestamp_ns)
+        .collect();
+    assert_eq!(stamps, expected);
+    assert_eq!(depth_of(&cut, 1), depth_of(&original, 6));
     // --list names the topics an import takes.
     let listed = run_ok("slope-import", &[bag.as_os_str(), "--list".as_ref()]);
     let text = String::from_utf8_lossy(&listed.stdout);

@@ -65,11 +65,27 @@ pub struct Rosbag2Exporter {
     /// With `replacing`: the temporary MCAP file renamed into place when
     /// finished (a second signal removes it).
     pending: Option<(tempfile::TempPath, UnfinishedFile)>,
+    /// Last, so that it is dropped after the temporary file is removed.
+    created: CreatedDir,
+}
+
+/// The bag directory while it is written, when this run made it: removed
+/// when the bag is dropped unfinished and the directory is empty (a run
+/// that failed leaves nothing behind).
+struct CreatedDir(Option<PathBuf>);
+
+impl Drop for CreatedDir {
+    fn drop(&mut self) {
+        if let Some(dir) = self.0.take() {
+            // Only an empty directory goes: remove_dir refuses any other.
+            let _ = std::fs::remove_dir(dir);
+        }
+    }
 }
 
 /// The directory a bag goes into: new, or an empty directory; its parent
-/// must exist.
-fn prepare_dir(dir: &Path) -> anyhow::Result<()> {
+/// must exist. True when it was made here.
+fn prepare_dir(dir: &Path) -> anyhow::Result<bool> {
     let name = dir.display();
     if dir.exists() {
         let empty = dir.is_dir()
@@ -83,7 +99,7 @@ fn prepare_dir(dir: &Path) -> anyhow::Result<()> {
                  own: give a new name"
             );
         }
-        return Ok(());
+        return Ok(false);
     }
     let parent = match dir.parent() {
         Some(parent) if !parent.as_os_str().is_empty() => parent,
@@ -95,7 +111,8 @@ fn prepare_dir(dir: &Path) -> anyhow::Result<()> {
             parent.display()
         );
     }
-    std::fs::create_dir(dir).with_context(|| format!("cannot create {name}"))
+    std::fs::create_dir(dir).with_context(|| format!("cannot create {name}"))?;
+    Ok(true)
 }
 
 impl Rosbag2Exporter {
@@ -110,7 +127,7 @@ impl Rosbag2Exporter {
         meta: &RecordingMeta,
         replacing: bool,
     ) -> anyhow::Result<Self> {
-        prepare_dir(dir)?;
+        let created = CreatedDir(prepare_dir(dir)?.then(|| dir.to_path_buf()));
         let stem = dir
             .file_name()
             .map_or_else(|| "bag".to_string(), |n| n.to_string_lossy().into_owned());
@@ -131,7 +148,8 @@ impl Rosbag2Exporter {
                 File::create(&path).with_context(|| format!("cannot create {}", path.display()))?;
             (file, None)
         };
-        let mut exporter = Self::with_file(file, compression, meta, dir, file_name, pending)?;
+        let mut exporter =
+            Self::with_file(file, compression, meta, dir, file_name, pending, created)?;
         exporter.write_tf_static()?;
         Ok(exporter)
     }
@@ -143,6 +161,7 @@ impl Rosbag2Exporter {
         dir: &Path,
         file_name: String,
         pending: Option<(tempfile::TempPath, UnfinishedFile)>,
+        created: CreatedDir,
     ) -> anyhow::Result<Self> {
         let name = dir.join(&file_name).display().to_string();
         let (chunk_compression, level) = compression.chunk_compression();
@@ -192,6 +211,7 @@ impl Rosbag2Exporter {
             dir: dir.to_path_buf(),
             file_name,
             pending,
+            created,
         })
     }
 
@@ -305,6 +325,8 @@ impl Rosbag2Exporter {
     /// Finishes the MCAP file (renaming it into place after a `replacing`
     /// create) and writes `metadata.yaml`.
     pub fn finish(mut self) -> anyhow::Result<()> {
+        // Finished or failed, the bag's directory stays from here on.
+        self.created.0 = None;
         let path = self.dir.join(&self.file_name);
         let name = path.display().to_string();
         self.writer
@@ -443,4 +465,104 @@ struct FileInformation {
     starting_time: SinceEpoch,
     duration: Nanoseconds,
     message_count: u64,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use slope_sensor::recording::{DepthInfo, MountInfo, TruthInfo};
+
+    fn meta() -> RecordingMeta {
+        RecordingMeta {
+            sensor: "synthetic".to_string(),
+            depth: DepthInfo {
+                width: 2,
+                height: 1,
+                unit_m: 0.001,
+                fx: 365.0,
+                fy: 365.0,
+                cx: 0.5,
+                cy: 0.0,
+            },
+            mount: MountInfo {
+                height_m: Some(0.5),
+                pitch_deg: Some(-20.0),
+                roll_deg: None,
+            },
+            truth: TruthInfo::default(),
+        }
+    }
+
+    #[test]
+    fn an_unfinished_bag_leaves_no_directory_and_a_finished_one_its_two_files() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("bag");
+        let bag = Rosbag2Exporter::create(&dir, McapCompression::Zstd, &meta(), true).unwrap();
+        drop(bag);
+        assert!(!dir.exists(), "an unfinished bag's directory is removed");
+
+        let mut bag = Rosbag2Exporter::create(&dir, McapCompression::None, &meta(), true).unwrap();
+        let estimate = SlopeEstimate {
+            capture_stamp_ns: 7,
+            ..SlopeEstimate::default()
+        };
+        bag.write(&McapFrame {
+            stamp_ns: 7,
+            width: 2,
+            height: 1,
+            depth: &[1500, 0],
+            depth_unit_m: 0.001,
+            points: &[],
+            estimate: Some(&estimate),
+        })
+        .unwrap();
+        bag.finish().unwrap();
+        let mut names: Vec<String> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert_eq!(names, ["bag_0.mcap", "metadata.yaml"]);
+        let bytes = std::fs::read(dir.join("bag_0.mcap")).unwrap();
+        let mut seen = Vec::new();
+        for message in mcap::MessageStream::new(&bytes).unwrap() {
+            let message = message.unwrap();
+            let schema = message.channel.schema.as_ref().unwrap();
+            assert_eq!(schema.encoding, "ros2msg");
+            assert_eq!(message.channel.message_encoding, "cdr");
+            seen.push((
+                message.channel.topic.clone(),
+                schema.name.clone(),
+                message.log_time,
+            ));
+        }
+        assert_eq!(
+            seen,
+            [
+                (
+                    "/tf_static".to_string(),
+                    "tf2_msgs/msg/TFMessage".to_string(),
+                    0
+                ),
+                (
+                    "/slope/depth".to_string(),
+                    "sensor_msgs/msg/Image".to_string(),
+                    7
+                ),
+                (
+                    "/slope/camera_info".to_string(),
+                    "sensor_msgs/msg/CameraInfo".to_string(),
+                    7
+                ),
+                (
+                    "/slope/estimate".to_string(),
+                    "slope_msgs/msg/SlopeEstimate".to_string(),
+                    7
+                ),
+            ]
+        );
+        let yaml = std::fs::read_to_string(dir.join("metadata.yaml")).unwrap();
+        assert!(yaml.contains("message_count: 4"), "{yaml}");
+        assert!(yaml.contains("storage_identifier: mcap"), "{yaml}");
+    }
 }

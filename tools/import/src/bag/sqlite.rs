@@ -31,10 +31,25 @@ impl SqliteBag {
             path: path.to_path_buf(),
             db,
         };
-        // A file that is no SQLite database fails here, at its first read.
-        bag.topic_rows().map_err(|e| BagError::NotABag {
-            path: path.to_path_buf(),
-            reason: format!("no rosbag2 topics table ({e})"),
+        // A file that is no SQLite database fails here, at its first read;
+        // so does a damaged one, whose tables may lie anywhere in the file.
+        bag.topic_rows().map_err(|e| {
+            let path = path.to_path_buf();
+            if e.sqlite_error_code() == Some(rusqlite::ErrorCode::DatabaseCorrupt) {
+                BagError::Damaged {
+                    path,
+                    reason: format!(
+                        "{e}: SQLite cannot read its topics table, so no message can be found (a \
+                         .db3 cut short loses the pages at its end; `sqlite3 BAG.db3 .recover` may \
+                         save the rest)"
+                    ),
+                }
+            } else {
+                BagError::NotABag {
+                    path,
+                    reason: format!("no rosbag2 topics table ({e})"),
+                }
+            }
         })?;
         Ok(bag)
     }
