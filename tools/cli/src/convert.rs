@@ -21,7 +21,8 @@ use slope_sensor::publish::StopFlag;
 
 use crate::cli::{max_frames_arg, open_recording, Interruption, LogArgs, OutputArgs};
 use crate::estimator::{load_config, method_arg};
-use crate::mcap_export::{McapCompression, McapExporter, McapFrame};
+use crate::export_format::{ExportFormat, FrameExporter};
+use crate::mcap_export::{McapCompression, McapFrame};
 
 #[derive(Debug, Parser)]
 #[command(
@@ -49,7 +50,8 @@ stays as it was.",
     after_help = "Examples:
   slope-convert tests/recordings/ramp16 -o ramp16.mcap     # then open ramp16.mcap in Foxglove
   slope-convert REC -o out.mcap --method tls --max-frames 10
-  slope-convert REC -o out.mcap --no-estimates            # depth and cloud only"
+  slope-convert REC -o out.mcap --no-estimates            # depth and cloud only
+  slope-convert REC -o bag --format rosbag2               # a ROS 2 bag: ros2 bag play bag"
 )]
 pub struct ConvertArgs {
     /// The recording directory (holds recording.toml and frames.csv).
@@ -74,6 +76,15 @@ pub struct ConvertArgs {
     /// Convert at most this many frames (the first ones).
     #[arg(long, value_parser = max_frames_arg)]
     pub max_frames: Option<u64>,
+
+    /// mcap: one MCAP file for Foxglove (JSON: depth, cloud, estimates).
+    /// rosbag2: a ROS 2 bag, the directory OUT (new or empty) with
+    /// metadata.yaml and OUT_0.mcap, CDR messages: /slope/depth
+    /// (sensor_msgs/msg/Image 16UC1), /slope/camera_info, /slope/estimate
+    /// (slope_msgs/msg/SlopeEstimate, ros2/slope_msgs) and the mount on
+    /// /tf_static (base_link to slope_camera).
+    #[arg(long, value_enum, default_value_t = ExportFormat::Mcap)]
+    pub format: ExportFormat,
 
     /// Leave the estimates out (depth and cloud only).
     #[arg(long)]
@@ -141,8 +152,12 @@ pub fn run(args: &ConvertArgs, stop: &StopFlag) -> anyhow::Result<ConvertStats> 
     let config =
         load_config(args.config.as_ref(), args.method)?.for_sensor(&recording.meta().sensor);
     let mut estimator = (!args.no_estimates).then(|| Estimator::new(config));
-    let mut exporter =
-        McapExporter::create_replacing(args.output(), args.mcap_compression, recording.meta())?;
+    let mut exporter = FrameExporter::create_replacing(
+        args.format,
+        args.output(),
+        args.mcap_compression,
+        recording.meta(),
+    )?;
     let stats = convert_frames(args, stop, &recording, estimator.as_mut(), &mut exporter)?;
     if stats.frames == 0 {
         return refuse_empty(args, stats);
@@ -159,7 +174,7 @@ fn convert_frames(
     stop: &StopFlag,
     recording: &Recording,
     mut estimator: Option<&mut Estimator>,
-    exporter: &mut McapExporter,
+    exporter: &mut FrameExporter,
 ) -> anyhow::Result<ConvertStats> {
     let depth_meta = &recording.meta().depth;
     let projector = recording.projector();

@@ -169,7 +169,7 @@ impl McapCompression {
     /// The `mcap` crate's chunk compression and its level: zstd's fastest
     /// (1: about 7 % larger than its default 3 and about 27 % quicker in
     /// `zstd -b` on these frames), lz4's default (0).
-    fn chunk_compression(self) -> (Option<mcap::Compression>, u32) {
+    pub(crate) fn chunk_compression(self) -> (Option<mcap::Compression>, u32) {
         match self {
             Self::Zstd => (Some(mcap::Compression::Zstd), 1),
             Self::Lz4 => (Some(mcap::Compression::Lz4), 0),

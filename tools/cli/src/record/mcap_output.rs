@@ -11,7 +11,7 @@ use super::args::{RecordArgs, RecordLimits, RecordSource};
 use super::output::check_parent;
 use super::topic::record_topic;
 use super::RecordStats;
-use crate::mcap_export::McapExporter;
+use crate::export_format::FrameExporter;
 
 /// `--format mcap`: the cloud topic (and the estimates) into an MCAP file.
 pub(super) fn record_mcap(
@@ -29,7 +29,7 @@ pub(super) fn record_mcap(
     let out = args.out_dir();
     if out.exists() {
         anyhow::bail!(
-            "{} exists; give a new file name for the MCAP file",
+            "{} exists; give a new name for the MCAP file (or the rosbag2 directory)",
             out.display()
         );
     }
@@ -49,7 +49,7 @@ pub(super) fn record_mcap(
 /// Writes the estimates received so far into `mcap`; returns how many.
 pub(super) fn write_estimates(
     estimates: &EstimateSubscriber,
-    mcap: &mut McapExporter,
+    mcap: &mut FrameExporter,
 ) -> anyhow::Result<u64> {
     let mut written = 0;
     while let Some(estimate) = estimates.receive()? {
@@ -63,7 +63,7 @@ pub(super) fn write_estimates(
 /// written, for up to 300 ms (less when `stop` is set); returns how many.
 pub(super) fn settle_estimates(
     estimates: &EstimateSubscriber,
-    mcap: &mut McapExporter,
+    mcap: &mut FrameExporter,
     stop: &StopFlag,
 ) -> anyhow::Result<u64> {
     let mut written = 0;

@@ -71,7 +71,7 @@ pub fn run(args: &RecordArgs, stop: &StopFlag) -> anyhow::Result<RecordStats> {
         // Say so before touching the output directory.
         return record_kinect(args, &limits, stop);
     }
-    if args.format() == RecordFormat::Mcap {
+    if matches!(args.format(), RecordFormat::Mcap | RecordFormat::Rosbag2) {
         return record_mcap(args, &limits, stop);
     }
     let created = prepare_out_dir(args.out_dir())?;

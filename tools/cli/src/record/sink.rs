@@ -1,6 +1,6 @@
 //! Where the topic's frames go: a recording directory
 //! ([`RecordingWriter`], stamped by a [`Timeline`]) or an MCAP file
-//! ([`McapExporter`]).
+//! ([`McapExporter`]) or a ROS 2 bag (an MCAP file too, [`Rosbag2Exporter`]).
 
 use std::path::Path;
 
@@ -12,12 +12,15 @@ use slope_sensor::source::SourceInfo;
 use super::args::{RecordArgs, RecordFormat};
 use super::images::{meta_for, TOPIC_DEPTH_UNIT_M};
 use super::timeline::Timeline;
+use crate::export_format::FrameExporter;
 use crate::mcap_export::{McapExporter, McapFrame};
+use crate::rosbag2_export::Rosbag2Exporter;
 
 /// Where the topic's frames go.
 pub(super) enum Sink {
     Recording(Box<RecordingWriter>, Timeline),
-    Mcap(Box<McapExporter>),
+    /// `--format mcap` or `rosbag2`.
+    Mcap(Box<FrameExporter>),
 }
 
 impl Sink {
@@ -31,11 +34,12 @@ impl Sink {
                 recording.set_compression(args.compression.into());
                 Sink::Recording(Box::new(recording), Timeline::new())
             }
-            RecordFormat::Mcap => Sink::Mcap(Box::new(McapExporter::create(
-                out,
-                args.mcap_compression,
-                &meta_for(info),
-            )?)),
+            RecordFormat::Mcap => Sink::Mcap(Box::new(FrameExporter::Mcap(Box::new(
+                McapExporter::create(out, args.mcap_compression, &meta_for(info))?,
+            )))),
+            RecordFormat::Rosbag2 => Sink::Mcap(Box::new(FrameExporter::Rosbag2(Box::new(
+                Rosbag2Exporter::create(out, args.mcap_compression, &meta_for(info), false)?,
+            )))),
         })
     }
 

@@ -29,7 +29,7 @@ pub fn record_topic(
     let subscriber =
         CloudSubscriber::create(&node, &names).context("cannot subscribe to clouds")?;
     let estimates = match args.format() {
-        RecordFormat::Mcap => Some(
+        RecordFormat::Mcap | RecordFormat::Rosbag2 => Some(
             EstimateSubscriber::create(&node, &names).context("cannot subscribe to estimates")?,
         ),
         RecordFormat::Recording => None,
