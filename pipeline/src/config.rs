@@ -33,6 +33,9 @@
 //! [cumulative]              # paper 3.2
 //! draws = 1000              # paper: 100
 //!
+//! [road]                    # roles of the surfaces, the road ahead
+//! corridor_half_width_m = 0.4
+//!
 //! [tracking]                # the slope followed over frames
 //! window = 15
 //! ```
@@ -52,7 +55,7 @@ pub use crate::normals::NormalsConfig;
 pub use crate::pass_through::PassThroughConfig;
 pub use crate::ransac_planes::RansacConfig;
 pub use crate::segmentation::SegmentationConfig;
-pub use crate::selection::SelectionConfig;
+pub use crate::selection::{RoadConfig, SelectionConfig};
 pub use crate::statistical_outlier::OutlierConfig;
 pub use crate::tracking::TrackingConfig;
 
@@ -100,6 +103,8 @@ pub struct EstimatorConfig {
     pub kmeans: KmeansConfig,
     pub cumulative: CumulativeConfig,
     pub selection: SelectionConfig,
+    /// The roles of the surfaces and the choice of the road ahead.
+    pub road: RoadConfig,
     pub tracking: TrackingConfig,
 }
 
@@ -117,6 +122,7 @@ impl Default for EstimatorConfig {
             kmeans: KmeansConfig::default(),
             cumulative: CumulativeConfig::default(),
             selection: SelectionConfig::default(),
+            road: RoadConfig::default(),
             tracking: TrackingConfig::default(),
         }
     }
@@ -180,7 +186,7 @@ impl EstimatorConfig {
 
     /// Checks every value's range; the error names the first bad key.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        let sections: [(&str, Result<(), InvalidValue>); 9] = [
+        let sections: [(&str, Result<(), InvalidValue>); 11] = [
             ("outlier", self.outlier.validate()),
             ("ransac", self.ransac.validate()),
             ("segmentation", self.segmentation.validate()),
@@ -189,6 +195,8 @@ impl EstimatorConfig {
             ("kmeans", self.kmeans.validate()),
             ("cumulative", self.cumulative.validate()),
             ("selection", self.selection.validate()),
+            ("road", self.road.validate()),
+            ("road", self.road_against_selection()),
             ("tracking", self.tracking.validate()),
         ];
         crate::validate::count_in("threads", self.threads, 1, MAX_THREADS)
@@ -197,6 +205,18 @@ impl EstimatorConfig {
             result.map_err(|e| ConfigError::Invalid(e.in_section(section)))?;
         }
         Ok(())
+    }
+}
+
+impl EstimatorConfig {
+    /// A ramp is steeper than "parallel" to the ground.
+    fn road_against_selection(&self) -> Result<(), InvalidValue> {
+        crate::validate::check(
+            self.road.max_ramp_deg > self.selection.parallel_tolerance_deg,
+            "max_ramp_deg",
+            self.road.max_ramp_deg,
+            "must be larger than selection.parallel_tolerance_deg",
+        )
     }
 }
 

@@ -16,7 +16,9 @@ use slope_ipc_types::{
 };
 use slope_pipeline::tracking::StreamPosition;
 use slope_pipeline::{parse_method, CloudView, Estimator, EstimatorConfig, FrameInfo};
-use slope_sensor::ipc::{create_node, CloudSubscriber, EstimatePublisher, HealthPublisher};
+use slope_sensor::ipc::{
+    create_node, CloudSubscriber, EstimatePublisher, HealthPublisher, SurfacesPublisher,
+};
 use slope_sensor::publish::StopFlag;
 
 use crate::cli::{max_frames_arg, node_name, wait_loop, CommonArgs, SilenceNote};
@@ -190,6 +192,7 @@ fn estimate(
     let node = create_node(&node_name("slope-estimator"))?;
     let subscriber = CloudSubscriber::create(&node, &names)?;
     let publisher = EstimatePublisher::create(&node, &names)?;
+    let surfaces = SurfacesPublisher::create(&node, &names)?;
     let health_publisher = if health_interval_s > 0.0 {
         Some(HealthPublisher::create(&node, &names)?)
     } else {
@@ -199,6 +202,7 @@ fn estimate(
         method = config.method.name(),
         clouds = subscriber.service_name(),
         estimates = %names.estimate(),
+        surfaces = %names.surfaces(),
         "estimator ready"
     );
     let health = HealthReporter::new(
@@ -206,7 +210,11 @@ fn estimate(
         health_publisher,
         health_interval_s,
     );
-    let mut worker = Worker::new(config, &subscriber, &publisher, args.max_frames, health);
+    let outputs = Outputs {
+        estimates: &publisher,
+        surfaces: &surfaces,
+    };
+    let mut worker = Worker::new(config, &subscriber, outputs, args.max_frames, health);
     serve(&mut worker, stop, manager)?;
     tracing::info!(
         processed = worker.stats.processed,
@@ -348,7 +356,7 @@ struct Worker<'a> {
     /// no name).
     sensor: [u8; SENSOR_NAME_LEN],
     subscriber: &'a CloudSubscriber,
-    publisher: &'a EstimatePublisher,
+    publisher: Outputs<'a>,
     stats: EstimatorStats,
     /// Index and capture time of the last cloud.
     last_frame: Option<StreamPosition>,
@@ -359,13 +367,20 @@ struct Worker<'a> {
     status: StatusRate,
 }
 
+/// Where a worker publishes each frame: the estimate and its surfaces.
+#[derive(Clone, Copy)]
+struct Outputs<'a> {
+    estimates: &'a EstimatePublisher,
+    surfaces: &'a SurfacesPublisher,
+}
+
 impl<'a> Worker<'a> {
     /// A worker that has processed nothing yet, its estimator built for a
     /// cloud without a sensor name until the first cloud says otherwise.
     fn new(
         config: EstimatorConfig,
         subscriber: &'a CloudSubscriber,
-        publisher: &'a EstimatePublisher,
+        publisher: Outputs<'a>,
         max_frames: Option<u64>,
         health: HealthReporter,
     ) -> Self {
@@ -465,7 +480,13 @@ impl Worker<'_> {
             self.last_slope_deg = Some(estimate.slope_deg);
         }
         drop(sample);
-        let sent = self.publisher.publish(&message)?;
+        let sent = self.publisher.estimates.publish(&message)?;
+        self.publisher.surfaces.publish(|surfaces| {
+            (surfaces.frame_index, surfaces.capture_stamp_ns) =
+                (header.frame_index, header.capture_stamp_ns);
+            surfaces.source_stamp_ns = header.source_stamp_ns;
+            estimate.write_surfaces(surfaces);
+        })?;
         self.stats.processed += 1;
         let mut stages = estimate.timings.stages.clone();
         stages.push(("total", estimate.timings.total_ms));
