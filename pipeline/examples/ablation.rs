@@ -22,6 +22,8 @@ use slope_pipeline::fixtures::{Scene, SceneCloud};
 use slope_pipeline::literal::{
     NormalsNeighbourhood, OutlierNeighbourhood, PassThroughMode, RansacScoring,
 };
+use slope_pipeline::segmentation::Proposal;
+use slope_pipeline::statistical_outlier::Fallback;
 use slope_pipeline::{EstimateStatus, Estimator, EstimatorConfig, FrameInfo};
 
 /// One of our changes: how to switch it on or off (the paper), and whether
@@ -32,7 +34,7 @@ struct Change {
     kept: bool,
 }
 
-const CHANGES: [Change; 10] = [
+const CHANGES: [Change; 12] = [
     Change {
         name: "1 grid outlier neighbours",
         set: |c, on| {
@@ -108,6 +110,32 @@ const CHANGES: [Change; 10] = [
     Change {
         name: "9 pair angles about the axis",
         set: |c, on| c.cumulative.about_axis = on,
+        kept: false,
+    },
+    Change {
+        name: "10 cell-grid plane proposal",
+        set: |c, on| {
+            // On the sample grid (change 2): every-point RANSAC has no
+            // proposal.
+            c.ransac.scoring = RansacScoring::SampleGrid;
+            c.segmentation.proposal = if on {
+                Proposal::Cells
+            } else {
+                Proposal::Sequential
+            }
+        },
+        kept: false,
+    },
+    Change {
+        name: "11 outlier statistic of the present neighbours",
+        set: |c, on| {
+            c.outlier.neighbourhood = OutlierNeighbourhood::Grid;
+            c.outlier.fallback = if on {
+                Fallback::PresentNeighbours
+            } else {
+                Fallback::ExactWindow
+            }
+        },
         kept: false,
     },
 ];

@@ -9,6 +9,7 @@
 //! ```toml
 //! method = "paper"          # "paper" | "least-squares" | "tls"
 //! seed = 0                  # seed of every random draw (RANSAC, averaging)
+//! threads = 1               # threads of a frame's stages (1..=64)
 //!
 //! [outlier]                 # statistical outlier removal (paper 2.1)
 //! neighbours = 20           # m
@@ -16,6 +17,9 @@
 //!
 //! [ransac]                  # plane segmentation (paper 2.2, 3)
 //! distance_threshold_m = 0.02
+//!
+//! [segmentation]            # how the planes are proposed
+//! proposal = "cells"        # "cells" | "sequential"
 //!
 //! [pass_through]            # paper 3.1
 //! max_points = 10000
@@ -50,6 +54,7 @@ pub use crate::cumulative_angle::CumulativeConfig;
 pub use crate::normals::NormalsConfig;
 pub use crate::pass_through::PassThroughConfig;
 pub use crate::ransac_planes::RansacConfig;
+pub use crate::segmentation::SegmentationConfig;
 pub use crate::selection::{RoadConfig, SelectionConfig};
 pub use crate::statistical_outlier::OutlierConfig;
 pub use crate::tracking::TrackingConfig;
@@ -59,6 +64,9 @@ pub use crate::tracking::TrackingConfig;
 pub fn parse_method(name: &str) -> Option<SlopeMethod> {
     SlopeMethod::ALL.into_iter().find(|m| m.name() == name)
 }
+
+/// The most threads `threads` may ask for.
+pub const MAX_THREADS: usize = 64;
 
 /// Why a configuration was rejected.
 #[derive(Debug, thiserror::Error)]
@@ -84,8 +92,12 @@ pub struct EstimatorConfig {
     /// Seed of every random draw; the same frame and config give the same
     /// estimate.
     pub seed: u64,
+    /// Threads a frame's stages may run on (1: the caller's only); the
+    /// estimate is the same for every count (pipeline README, "Threads").
+    pub threads: usize,
     pub outlier: OutlierConfig,
     pub ransac: RansacConfig,
+    pub segmentation: SegmentationConfig,
     pub pass_through: PassThroughConfig,
     pub normals: NormalsConfig,
     pub kmeans: KmeansConfig,
@@ -101,8 +113,10 @@ impl Default for EstimatorConfig {
         Self {
             method: SlopeMethod::Paper,
             seed: 0,
+            threads: 1,
             outlier: OutlierConfig::default(),
             ransac: RansacConfig::default(),
+            segmentation: SegmentationConfig::default(),
             pass_through: PassThroughConfig::default(),
             normals: NormalsConfig::default(),
             kmeans: KmeansConfig::default(),
@@ -137,7 +151,9 @@ impl EstimatorConfig {
         };
         let mut c = Self::default();
         c.outlier.neighbourhood = OutlierNeighbourhood::KdTree;
+        c.outlier.fallback = crate::statistical_outlier::Fallback::ExactWindow;
         c.ransac.scoring = RansacScoring::EveryPoint;
+        c.segmentation.proposal = crate::segmentation::Proposal::Sequential;
         c.ransac.distance_threshold_per_m2 = 0.0;
         c.pass_through.mode = PassThroughMode::Depth;
         c.normals.neighbourhood = NormalsNeighbourhood::KdTree;
@@ -170,9 +186,10 @@ impl EstimatorConfig {
 
     /// Checks every value's range; the error names the first bad key.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        let sections: [(&str, Result<(), InvalidValue>); 10] = [
+        let sections: [(&str, Result<(), InvalidValue>); 11] = [
             ("outlier", self.outlier.validate()),
             ("ransac", self.ransac.validate()),
+            ("segmentation", self.segmentation.validate()),
             ("pass_through", self.pass_through.validate()),
             ("normals", self.normals.validate()),
             ("kmeans", self.kmeans.validate()),
@@ -182,6 +199,8 @@ impl EstimatorConfig {
             ("road", self.road_against_selection()),
             ("tracking", self.tracking.validate()),
         ];
+        crate::validate::count_in("threads", self.threads, 1, MAX_THREADS)
+            .map_err(ConfigError::Invalid)?;
         for (section, result) in sections {
             result.map_err(|e| ConfigError::Invalid(e.in_section(section)))?;
         }
@@ -264,7 +283,9 @@ mod tests {
         // Nothing else differs.
         let mut changed = paper.clone();
         changed.outlier.neighbourhood = ours.outlier.neighbourhood;
+        changed.outlier.fallback = ours.outlier.fallback;
         changed.ransac.scoring = ours.ransac.scoring;
+        changed.segmentation.proposal = ours.segmentation.proposal;
         changed.ransac.distance_threshold_per_m2 = ours.ransac.distance_threshold_per_m2;
         changed.normals.neighbourhood = ours.normals.neighbourhood;
         changed.pass_through.mode = ours.pass_through.mode;

@@ -12,6 +12,7 @@
 //! ([`Inspection`], `inspection.rs`) are data in files of their own,
 //! re-exported here.
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use nalgebra::Vector3;
@@ -34,7 +35,8 @@ use crate::literal::{
 use crate::normals::{NormalEstimator, PlaneSupport};
 use crate::pass_through::PassThrough;
 use crate::plane_fit::Plane;
-use crate::ransac_planes::{PlaneSegmenter, SegmentedPlane, Threshold};
+use crate::ransac_planes::{SegmentedPlane, Threshold};
+use crate::segmentation::Segmentation;
 use crate::selection::{
     chosen_segments, select_ground, survey_surfaces, Ground, PlaneSegment, PlaneSummary, RoadScene,
     Selection, SurveyInput,
@@ -103,7 +105,7 @@ pub struct Estimator {
     config: EstimatorConfig,
     outlier: StatisticalOutlierFilter,
     keep: Vec<bool>,
-    segmenter: PlaneSegmenter,
+    segmenter: Segmentation,
     /// The paper's stages 1 and 2 as written (`literal/`), when configured.
     knn_outlier: KnnOutlierFilter,
     every_point: EveryPointRansac,
@@ -115,6 +117,9 @@ pub struct Estimator {
     roles: Roles,
     /// The last frame's surfaces and road (moved into its estimate).
     scene: Option<RoadScene>,
+    /// With `threads` > 1: the worker threads, made once with the
+    /// estimator (clones share them).
+    pool: Option<Arc<rayon::ThreadPool>>,
 }
 
 impl Estimator {
@@ -123,7 +128,7 @@ impl Estimator {
             config,
             outlier: StatisticalOutlierFilter::new(),
             keep: Vec::new(),
-            segmenter: PlaneSegmenter::new(),
+            segmenter: Segmentation::new(),
             knn_outlier: KnnOutlierFilter::new(),
             every_point: EveryPointRansac::new(),
             summaries: Vec::new(),
@@ -132,7 +137,28 @@ impl Estimator {
             tracker: SlopeTracker::new(),
             roles: Roles::default(),
             scene: None,
+            pool: None,
         }
+        .with_threads()
+    }
+
+    /// The worker pool for `config.threads` (none for 1); without one (the
+    /// system refused the threads) the stages run on the caller's thread.
+    fn with_threads(mut self) -> Self {
+        let threads = self.config.threads;
+        if threads > 1 {
+            match rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .thread_name(|k| format!("slope-estimator-{k}"))
+                .build()
+            {
+                Ok(pool) => self.pool = Some(Arc::new(pool)),
+                Err(e) => {
+                    tracing::warn!(threads, error = %e, "cannot start the estimator's threads: running on one");
+                }
+            }
+        }
+        self
     }
 
     /// Keeps the paper method's sampled normals of each frame for
@@ -251,6 +277,7 @@ impl Estimator {
                 &self.config,
                 &mut rng,
                 clock,
+                self.pool.as_deref(),
             )?,
             method => {
                 let fit = baseline_fit(&inclined, ground.as_ref(), &selection, method);
@@ -307,12 +334,17 @@ impl Estimator {
         }
     }
 
-    /// Stage 2 with the configured RANSAC (its planes: [`segmented`]).
+    /// Stage 2 with the configured design (its planes: [`segmented`]).
     fn segment_planes(&mut self, cloud: &CloudView<'_>, rng: &mut ChaCha8Rng) {
         match self.config.ransac.scoring {
             RansacScoring::SampleGrid => {
-                self.segmenter
-                    .segment(cloud, &self.keep, &self.config.ransac, rng);
+                self.segmenter.segment(
+                    cloud,
+                    &self.keep,
+                    &self.config.ransac,
+                    &self.config.segmentation,
+                    rng,
+                );
             }
             RansacScoring::EveryPoint => {
                 self.every_point
@@ -424,7 +456,7 @@ impl Estimator {
 
 /// The planes of the last segmentation, from the configured RANSAC.
 fn segmented<'a>(
-    segmenter: &'a PlaneSegmenter,
+    segmenter: &'a Segmentation,
     every_point: &'a EveryPointRansac,
     config: &EstimatorConfig,
 ) -> &'a [SegmentedPlane] {
@@ -437,9 +469,10 @@ fn segmented<'a>(
 /// The buffers of the paper method's stages 3-6.
 #[derive(Debug, Clone, Default)]
 struct PaperStages {
-    pass_through: PassThroughStage,
-    normals: NormalsStage,
-    kmeans: CosineKmeans,
+    /// Stages 3-5 of the inclined plane and of the ground, each with its
+    /// own buffers (with `threads` > 1 the two run at once).
+    inclined: PlaneStages,
+    ground: PlaneStages,
     ground_normals: Vec<Vector3<f64>>,
     inclined_normals: Vec<Vector3<f64>>,
     /// The sampled normals of the frame, when inspecting.
@@ -449,6 +482,9 @@ struct PaperStages {
 impl PaperStages {
     /// Pass-through, normals and k-means on both planes, then the
     /// cumulative angle (`ground` `None`: the selection's up vector).
+    /// With a pool (and not inspecting) the two planes' stages 3-5 run at
+    /// once, each on its own buffers: the same computations as one after
+    /// the other, so the same bits; their time is one lap, `normals`.
     #[allow(clippy::too_many_arguments)]
     fn fit(
         &mut self,
@@ -459,19 +495,54 @@ impl PaperStages {
         config: &EstimatorConfig,
         rng: &mut ChaCha8Rng,
         clock: &mut Stopwatch,
+        pool: Option<&rayon::ThreadPool>,
     ) -> Result<Fit, EstimateStatus> {
-        let incl = self
-            .plane_normals(cloud, inclined, config, true, clock)
-            .ok_or(EstimateStatus::NoInclinedPlane)?;
-        let ground_normal = match ground {
-            Some(g) => Some(
-                self.plane_normals(cloud, g, config, false, clock)
-                    .ok_or(EstimateStatus::NoGround)?,
-            ),
-            None => {
-                self.ground_normals.clear();
-                self.ground_normals.push(selection.up);
-                None
+        let (incl, ground_normal) = match (ground, pool) {
+            (Some(g), Some(pool)) if self.inspected.is_none() => {
+                let (a, b) = (&mut self.inclined, &mut self.ground);
+                let (ia, ib) = (&mut self.inclined_normals, &mut self.ground_normals);
+                let (incl, ground_normal) = pool.join(
+                    || a.dominant_normal(cloud, inclined, config, ia, None),
+                    || b.dominant_normal(cloud, g, config, ib, None),
+                );
+                clock.lap("normals");
+                let incl = incl.ok_or(EstimateStatus::NoInclinedPlane)?;
+                (incl, Some(ground_normal.ok_or(EstimateStatus::NoGround)?))
+            }
+            _ => {
+                let seen = self.inspected.as_mut().map(|v| (v, true));
+                let incl = self
+                    .inclined
+                    .dominant_normal(
+                        cloud,
+                        inclined,
+                        config,
+                        &mut self.inclined_normals,
+                        Some((clock, seen)),
+                    )
+                    .ok_or(EstimateStatus::NoInclinedPlane)?;
+                let ground_normal = match ground {
+                    Some(g) => {
+                        let seen = self.inspected.as_mut().map(|v| (v, false));
+                        Some(
+                            self.ground
+                                .dominant_normal(
+                                    cloud,
+                                    g,
+                                    config,
+                                    &mut self.ground_normals,
+                                    Some((clock, seen)),
+                                )
+                                .ok_or(EstimateStatus::NoGround)?,
+                        )
+                    }
+                    None => {
+                        self.ground_normals.clear();
+                        self.ground_normals.push(selection.up);
+                        None
+                    }
+                };
+                (incl, ground_normal)
             }
         };
         let axis = config
@@ -498,28 +569,45 @@ impl PaperStages {
             samples: summary.samples,
         })
     }
+}
 
-    /// Pass-through, normals and cosine k-means for one plane: fills the
-    /// inclined or ground normal buffer with the dominant cluster's normals
-    /// and returns its (unit) mean.
-    fn plane_normals(
+/// Where one plane's stages report: the clock (a lap per stage) and, when
+/// inspecting, the frame's sampled normals with whether this is the
+/// inclined plane.
+type PlaneReport<'a> = (
+    &'a mut Stopwatch,
+    Option<(&'a mut Vec<InspectedNormal>, bool)>,
+);
+
+/// Stages 3-5 of one plane, with their buffers.
+#[derive(Debug, Clone, Default)]
+struct PlaneStages {
+    pass_through: PassThroughStage,
+    normals: NormalsStage,
+    kmeans: CosineKmeans,
+}
+
+impl PlaneStages {
+    /// Pass-through, normals and cosine k-means for one plane: fills `out`
+    /// with the dominant cluster's normals and returns their (unit) mean.
+    fn dominant_normal(
         &mut self,
         cloud: &CloudView<'_>,
         segment: &PlaneSegment<'_>,
         config: &EstimatorConfig,
-        inclined: bool,
-        clock: &mut Stopwatch,
+        out: &mut Vec<Vector3<f64>>,
+        mut report: Option<PlaneReport<'_>>,
     ) -> Option<Vector3<f64>> {
-        let out = if inclined {
-            &mut self.inclined_normals
-        } else {
-            &mut self.ground_normals
+        let mut lap = |name| {
+            if let Some((clock, _)) = &mut report {
+                clock.lap(name);
+            }
         };
         out.clear();
         let (members, support, walked) =
             self.pass_through
                 .filter(cloud, segment.inliers, &config.pass_through);
-        clock.lap("pass_through");
+        lap("pass_through");
         let found = self.normals.estimate(
             cloud,
             members,
@@ -527,22 +615,24 @@ impl PaperStages {
             segment.rms_m,
             &config.normals,
         );
-        clock.lap("normals");
+        lap("normals");
         let clustering = self.kmeans.cluster(
             found,
             config.kmeans.clusters,
             config.kmeans.max_iterations,
             config.kmeans.merge_spread_ratio,
         );
-        if let (Some(seen), Some(c)) = (&mut self.inspected, &clustering) {
+        if let (Some((_, Some((seen, inclined)))), Some(c)) = (&mut report, &clustering) {
             let flags = self.kmeans.kept_flags(found, c);
-            inspect_normals(seen, members, found, flags, inclined);
+            inspect_normals(seen, members, found, flags, *inclined);
         }
         let result = clustering.and_then(|c| {
             out.extend(self.kmeans.kept_members(&c).copied());
             out.iter().sum::<Vector3<f64>>().try_normalize(1e-12)
         });
-        clock.lap("kmeans");
+        if let Some((clock, _)) = &mut report {
+            clock.lap("kmeans");
+        }
         result
     }
 }

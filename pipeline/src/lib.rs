@@ -8,7 +8,8 @@
 //! | file | stage |
 //! |---|---|
 //! | `statistical_outlier/` | 1. statistical outlier removal (m = 20, alpha = 2; grid path, exact fallback, general m, threshold) |
-//! | `ransac_planes/` | 2. RANSAC plane segmentation (sample grid, f32 inlier test, hypotheses, regions, labelling) |
+//! | `segmentation/` | 2. plane segmentation: the design chosen by `segmentation.proposal`; `cells/` the cell-grid proposal (planar cells, region growing, RANSAC fit per region, boundary) |
+//! | `ransac_planes/` | 2. RANSAC plane segmentation, sequential (sample grid, f32 inlier test, hypotheses, regions, labelling; the labelling both designs share) |
 //! | `pass_through.rs` | 3. pass-through filter (at most 10,000 points a plane) |
 //! | `normals/` | 4. PCA normals over K = 100 neighbours (window tables, k-d tree fallback, coarse grid normals) |
 //! | `cosine_kmeans/` | 5. cosine k-means, dominant cluster (farthest-first centres, f32 assignment and cluster sums, Lloyd iterations, merge) |
@@ -51,6 +52,7 @@ pub mod normals;
 pub mod pass_through;
 pub mod plane_fit;
 pub mod ransac_planes;
+pub mod segmentation;
 pub mod selection;
 pub mod sensor_noise;
 pub mod statistical_outlier;
@@ -61,7 +63,8 @@ pub mod validate;
 pub use cloud::CloudView;
 pub use config::{
     parse_method, ConfigError, CumulativeConfig, EstimatorConfig, KmeansConfig, NormalsConfig,
-    OutlierConfig, PassThroughConfig, RansacConfig, RoadConfig, SelectionConfig, TrackingConfig,
+    OutlierConfig, PassThroughConfig, RansacConfig, RoadConfig, SegmentationConfig,
+    SelectionConfig, TrackingConfig,
 };
 pub use estimator::{
     Estimate, Estimator, FrameInfo, InspectedNormal, Inspection, PlaneEstimate, StageTimings,

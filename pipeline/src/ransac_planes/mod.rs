@@ -95,6 +95,40 @@ pub struct SegmentedPlane {
     pub moments: Moments,
 }
 
+/// What a plane proposal sees of the sample grid (every
+/// `sample_stride_px`-th pixel in both directions, from pixel
+/// `stride / 2`), and where it says which plane takes each sample cell.
+#[derive(Debug)]
+pub struct SampleCells<'a> {
+    /// Sample cells per row and per column.
+    pub width: usize,
+    pub height: usize,
+    /// Pixels between sample points.
+    pub stride: usize,
+    /// Per sample cell (raster order): its kept sample point, NaN if none.
+    pub points: &'a [Vector3<f64>],
+    /// Per sample cell: the index of the proposed plane that takes it,
+    /// [`NO_PLANE`] for none (all [`NO_PLANE`] on entry). Every kept pixel
+    /// then goes to the nearest of the planes of the 3x3 sample cells
+    /// around it, within the threshold.
+    pub labels: &'a mut [u16],
+}
+
+/// A way of proposing the planes of a frame on the sample grid, in place
+/// of the sequential extraction ([`PlaneSegmenter::segment_proposed`]).
+pub trait PlaneProposal {
+    /// The planes of the kept pixels (largest first), each owning the
+    /// sample cells labelled with its index in `cells.labels`.
+    fn propose(
+        &mut self,
+        cloud: &CloudView<'_>,
+        keep: &[bool],
+        cells: SampleCells<'_>,
+        config: &RansacConfig,
+        rng: &mut ChaCha8Rng,
+    ) -> Vec<Plane>;
+}
+
 /// Reusable buffers of the segmentation.
 #[derive(Debug, Default, Clone)]
 pub struct PlaneSegmenter {
@@ -128,7 +162,8 @@ pub struct PlaneSegmenter {
     moments: Vec<Moments>,
 }
 
-const NO_PLANE: u16 = u16::MAX;
+/// The label of a sample cell no plane took.
+pub const NO_PLANE: u16 = u16::MAX;
 /// Hypotheses whose largest region is too small before segmentation stops.
 const MAX_FAILURES: usize = 8;
 /// Plane labels are `u16` (`NO_PLANE` excluded).
@@ -153,11 +188,7 @@ impl PlaneSegmenter {
         config: &RansacConfig,
         rng: &mut ChaCha8Rng,
     ) -> &[SegmentedPlane] {
-        let Some(n) = cloud.width.checked_mul(cloud.height) else {
-            self.planes.clear();
-            return &self.planes;
-        };
-        if cloud.points.len() != n || keep.len() != n || n >= sample::NO_SAMPLE as usize {
+        if !self.fits(cloud, keep) {
             self.planes.clear();
             return &self.planes;
         }
@@ -166,12 +197,65 @@ impl PlaneSegmenter {
         } else {
             None
         };
+        self.load_sample(cloud, keep, config, cos_gate);
+        let found = self.extract_planes(config, cos_gate.is_some(), rng);
+        self.finish(cloud, keep, config, found)
+    }
+
+    /// Segments the points marked in `keep` into the planes `proposal`
+    /// proposes on the sample grid (instead of the sequential extraction),
+    /// then labels the pixels and refits as [`Self::segment`] does.
+    pub fn segment_proposed<P: PlaneProposal>(
+        &mut self,
+        cloud: &CloudView<'_>,
+        keep: &[bool],
+        config: &RansacConfig,
+        proposal: &mut P,
+        rng: &mut ChaCha8Rng,
+    ) -> &[SegmentedPlane] {
+        if !self.fits(cloud, keep) {
+            self.planes.clear();
+            return &self.planes;
+        }
+        self.load_sample(cloud, keep, config, None);
+        let cells = SampleCells {
+            width: self.sample.coarse_w,
+            height: self.sample.coarse_h,
+            stride: self.sample.stride,
+            points: &self.sample.cell_point,
+            labels: &mut self.cell_plane,
+        };
+        let mut found = proposal.propose(cloud, keep, cells, config, rng);
+        found.truncate(config.max_planes.min(MAX_PLANES));
+        for label in &mut self.cell_plane {
+            if *label as usize >= found.len() {
+                *label = NO_PLANE;
+            }
+        }
+        self.finish(cloud, keep, config, found)
+    }
+
+    /// Whether `cloud` and `keep` describe one frame the sample grid can
+    /// index (`u32` cells).
+    fn fits(&self, cloud: &CloudView<'_>, keep: &[bool]) -> bool {
+        cloud.width.checked_mul(cloud.height).is_some_and(|n| {
+            cloud.points.len() == n && keep.len() == n && n < sample::NO_SAMPLE as usize
+        })
+    }
+
+    /// Fills the sample grid (coarse normals when `cos_gate` is set) and
+    /// frees every cell.
+    fn load_sample(
+        &mut self,
+        cloud: &CloudView<'_>,
+        keep: &[bool],
+        config: &RansacConfig,
+        cos_gate: Option<f64>,
+    ) {
         self.sample.load(cloud, keep, config, cos_gate);
         self.cell_plane.clear();
         self.cell_plane
             .resize(self.sample.coarse_w * self.sample.coarse_h, NO_PLANE);
-        let found = self.extract_planes(config, cos_gate.is_some(), rng);
-        self.finish(cloud, keep, config, found)
     }
 
     /// The extraction loop on the sample: planes one after another, each

@@ -16,6 +16,24 @@ pub struct OutlierConfig {
     /// Neighbours from the pixel grid (ours) or a k-d tree over the whole
     /// cloud (the paper, `literal/knn_outlier.rs`).
     pub neighbourhood: crate::literal::OutlierNeighbourhood,
+    /// The statistic of a pixel missing some of its m = 20 grid neighbours
+    /// (grid neighbourhood only).
+    pub fallback: Fallback,
+}
+
+/// What a pixel missing some of its 20 grid neighbours takes
+/// (`outlier.fallback`; m = 20 only).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Fallback {
+    /// The mean distance to the grid neighbours it has, with at least 10;
+    /// else the exact window. An option: it fails one cluttered-scene test
+    /// (pipeline README).
+    PresentNeighbours,
+    /// The mean distance to its 20 nearest measured pixels of the 9x9
+    /// window, exactly (the default).
+    #[default]
+    ExactWindow,
 }
 
 impl Default for OutlierConfig {
@@ -25,6 +43,7 @@ impl Default for OutlierConfig {
             neighbours: 20,
             std_ratio: 2.0,
             neighbourhood: crate::literal::OutlierNeighbourhood::Grid,
+            fallback: Fallback::ExactWindow,
         }
     }
 }

@@ -20,6 +20,36 @@ const HALF_DISC: [(isize, isize); 10] = [
     (1, 2),
 ];
 
+/// A pixel's 20 pair distances in the pair rows, in the order they are
+/// summed: `(k, dv, shift)`, the pair of offset `HALF_DISC[k]` stored
+/// with the row `dv` rows up, at column `u + 2 - shift` of that pair row.
+const DISC_TERMS: [(usize, usize, isize); 20] = [
+    (7, 2, -1),
+    (8, 2, 0),
+    (9, 2, 1),
+    (2, 1, -2),
+    (3, 1, -1),
+    (4, 1, 0),
+    (5, 1, 1),
+    (6, 1, 2),
+    (0, 0, 0),
+    (0, 0, 1),
+    (1, 0, 0),
+    (1, 0, 2),
+    (2, 0, 0),
+    (3, 0, 0),
+    (4, 0, 0),
+    (5, 0, 0),
+    (6, 0, 0),
+    (7, 0, 0),
+    (8, 0, 0),
+    (9, 0, 0),
+];
+
+/// Grid neighbours a pixel must have to take the mean distance to those it
+/// has: half of m.
+pub(super) const MIN_PRESENT: usize = 10;
+
 /// True when `HALF_DISC[start..start + len]` are `(du, dv)`, `(du + 1, dv)`,
 /// ...: offsets that reach one image row, from column `du` on.
 const fn disc_row_run(start: usize, len: usize, du: isize, dv: isize) -> bool {
@@ -42,7 +72,12 @@ impl StatisticalOutlierFilter {
     /// without scattering into other rows. A NaN in the sum means a missing
     /// neighbour (NaN coordinates propagate), and such pixels take the
     /// fallback.
-    pub(super) fn grid_disc_statistic(&mut self, w: usize, h: usize, pad: usize) {
+    ///
+    /// With `present` a pixel that has at least [`MIN_PRESENT`] of its 20
+    /// grid neighbours takes the mean distance to those it has instead (the
+    /// finite pair distances, summed in the same order); only the others
+    /// search the 9x9 window.
+    pub(super) fn grid_disc_statistic(&mut self, w: usize, h: usize, pad: usize, present: bool) {
         const M: usize = 20;
         // The pair rows span the columns -2..w+2 of the rows -2..h; `pad`
         // (4 for m = 20) keeps every access inside the padded planes.
@@ -83,13 +118,16 @@ impl StatisticalOutlierFilter {
             let v = row - pad;
             let centre = row * pw + pad;
             // The sum is NaN where the centre or a neighbour has no reading;
-            // blocks with a measured centre among those take the fallback.
+            // blocks with a measured centre among those take the mean of the
+            // neighbours present (with `present`, at least MIN_PRESENT) or
+            // the exact window search.
             const BLOCK: usize = 32;
             let stats = &mut self.mean_distance[v * w..(v + 1) * w];
             let measured = &self.zs[centre..centre + w];
             let blocks = stats
                 .chunks_mut(BLOCK)
                 .zip(self.row_sum[..w].chunks(BLOCK).zip(measured.chunks(BLOCK)));
+            let mut starts = None;
             for (b, (stats, (sums, zs))) in blocks.enumerate() {
                 let mut missing = false;
                 for ((stat, &s), &z) in stats.iter_mut().zip(sums).zip(zs) {
@@ -99,10 +137,16 @@ impl StatisticalOutlierFilter {
                 if !missing {
                     continue;
                 }
+                let starts = starts.get_or_insert_with(|| disc_starts(row, ew));
                 for (u, (stat, z)) in stats.iter_mut().zip(zs).enumerate() {
                     if stat.is_nan() && z.is_finite() {
-                        let c = centre + b * BLOCK + u;
-                        *stat = fallback_disc([&self.xs, &self.ys, &self.zs], c, pw);
+                        let u = b * BLOCK + u;
+                        let near = present
+                            .then(|| present_mean(&self.pairs, starts, u))
+                            .flatten();
+                        *stat = near.unwrap_or_else(|| {
+                            fallback_disc([&self.xs, &self.ys, &self.zs], centre + u, pw)
+                        });
                     }
                 }
             }
@@ -123,28 +167,7 @@ impl StatisticalOutlierFilter {
             let start = (2 - shift) as usize;
             &self.pairs[base + start..base + start + w]
         };
-        let terms: [&[f32]; 20] = [
-            term(7, 2, -1),
-            term(8, 2, 0),
-            term(9, 2, 1),
-            term(2, 1, -2),
-            term(3, 1, -1),
-            term(4, 1, 0),
-            term(5, 1, 1),
-            term(6, 1, 2),
-            term(0, 0, 0),
-            term(0, 0, 1),
-            term(1, 0, 0),
-            term(1, 0, 2),
-            term(2, 0, 0),
-            term(3, 0, 0),
-            term(4, 0, 0),
-            term(5, 0, 0),
-            term(6, 0, 0),
-            term(7, 0, 0),
-            term(8, 0, 0),
-            term(9, 0, 0),
-        ];
+        let terms: [&[f32]; 20] = DISC_TERMS.map(|(k, dv, shift)| term(k, dv, shift));
         // Two passes of ten terms: twenty streams at once do not fit the
         // registers.
         let out = &mut self.row_sum[..w];
@@ -163,6 +186,28 @@ impl StatisticalOutlierFilter {
             *o = s;
         }
     }
+}
+
+/// Where pixel 0's 20 pair distances sit in the pair rows for padded row
+/// `row` (pixel `u`'s are `u` further), in `DISC_TERMS` order.
+fn disc_starts(row: usize, ew: usize) -> [usize; 20] {
+    DISC_TERMS
+        .map(|(k, dv, shift)| ((row - dv) % 3 * HALF_DISC.len() + k) * ew + (2 - shift) as usize)
+}
+
+/// The mean distance from pixel `u` to those of its 20 grid neighbours
+/// that have a reading (the finite pair distances at `starts`, summed in
+/// the order of a complete disc); `None` with fewer than [`MIN_PRESENT`].
+#[inline]
+fn present_mean(pairs: &[f32], starts: &[usize; 20], u: usize) -> Option<f32> {
+    let (mut sum, mut count) = (0.0f32, 0u32);
+    for &s in starts {
+        let d = pairs[s + u];
+        let finite = !d.is_nan();
+        sum += if finite { d } else { 0.0 };
+        count += u32::from(finite);
+    }
+    (count as usize >= MIN_PRESENT).then(|| sum / count as f32)
 }
 
 /// Distances from the `n` points at `first..` of the coordinate planes to

@@ -120,7 +120,13 @@ fn grid_filter_agrees_with_the_brute_force_filter_on_a_ramp() {
 /// window two pixels wider, or infinity with fewer than m there. Returns
 /// the statistic per pixel (NaN without a reading), the threshold and
 /// the number of pixels that took the wider window.
-fn reference_statistic(cloud: &SceneCloud, m: usize, alpha: f64) -> (Vec<f64>, f64, usize) {
+fn reference_statistic(
+    cloud: &SceneCloud,
+    config: &OutlierConfig,
+) -> (Vec<f64>, f64, usize, usize) {
+    let (m, alpha) = (config.neighbours, config.std_ratio);
+    let present = m == 20 && config.fallback == Fallback::PresentNeighbours;
+    let mut present_used = 0;
     let (w, h) = (cloud.width as isize, cloud.height as isize);
     let point = |u: isize, v: isize| -> Option<[f64; 3]> {
         if u < 0 || v < 0 || u >= w || v >= h {
@@ -153,6 +159,12 @@ fn reference_statistic(cloud: &SceneCloud, m: usize, alpha: f64) -> (Vec<f64>, f
                 d
             };
             let mut d = distances(r, m == 20);
+            if d.len() < m && present && d.len() >= 10 {
+                // The mean distance to the grid neighbours it has.
+                present_used += 1;
+                stat[(v * w + u) as usize] = d.iter().sum::<f64>() / d.len() as f64;
+                continue;
+            }
             if d.len() < m {
                 fallbacks += 1;
                 d = distances(r + 2, false);
@@ -168,7 +180,7 @@ fn reference_statistic(cloud: &SceneCloud, m: usize, alpha: f64) -> (Vec<f64>, f
     let n = finite.len() as f64;
     let mean = finite.iter().sum::<f64>() / n;
     let std = (finite.iter().map(|d| (d - mean).powi(2)).sum::<f64>() / n).sqrt();
-    (stat, mean + alpha * std, fallbacks)
+    (stat, mean + alpha * std, fallbacks, present_used)
 }
 
 /// A ramp between walls with holes of every kind: scattered missing
@@ -207,9 +219,16 @@ fn statistic_and_verdicts_match_a_per_pixel_reference_on_a_frame_with_holes() {
     let cloud = holed_fixture(160, 120, 21);
     let view = cloud.view();
     let measured = cloud.points.iter().filter(|p| p.is_valid()).count();
-    for m in [20, 8, 24] {
+    let cases = [
+        (20, Fallback::ExactWindow),
+        (20, Fallback::PresentNeighbours),
+        (8, Fallback::PresentNeighbours),
+        (24, Fallback::PresentNeighbours),
+    ];
+    for (m, fallback) in cases {
         let config = OutlierConfig {
             neighbours: m,
+            fallback,
             ..OutlierConfig::default()
         };
         let mut filter = StatisticalOutlierFilter::new();
@@ -217,9 +236,15 @@ fn statistic_and_verdicts_match_a_per_pixel_reference_on_a_frame_with_holes() {
         // Twice: the second run reuses the buffers.
         filter.filter(&view, &config, &mut keep);
         let stats = filter.filter(&view, &config, &mut keep);
-        let (oracle, threshold, fallbacks) = reference_statistic(&cloud, m, config.std_ratio);
-        // The fixture exercises the fallback and the isolated case.
-        assert!(fallbacks * 4 > measured, "m {m}: {fallbacks} of {measured}");
+        let (oracle, threshold, fallbacks, present) = reference_statistic(&cloud, &config);
+        // The fixture exercises the fallback, the present neighbours' mean
+        // and the isolated case.
+        if m == 20 && fallback == Fallback::PresentNeighbours {
+            assert!(present * 4 > measured, "{present} of {measured}");
+            assert!(fallbacks >= 20, "{fallbacks} of {measured}");
+        } else {
+            assert!(fallbacks * 4 > measured, "m {m}: {fallbacks} of {measured}");
+        }
         let isolated = oracle.iter().filter(|d| d.is_infinite()).count();
         assert!(isolated >= 10, "m {m}: {isolated} isolated");
         assert_eq!(stats.kept + stats.removed, measured);

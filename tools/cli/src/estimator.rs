@@ -83,8 +83,24 @@ pub struct EstimatorArgs {
     )]
     pub health_interval: Option<f64>,
 
+    /// Threads a frame's stages may run on (1-64; default 1, or the config
+    /// file's `[estimator] threads`): with 2 the ground's and the inclined
+    /// plane's normals run at once; the estimate is the same.
+    #[arg(long, value_parser = threads_arg)]
+    pub threads: Option<usize>,
+
     #[command(flatten)]
     pub common: CommonArgs,
+}
+
+/// `--threads`: 1 to 64.
+pub fn threads_arg(text: &str) -> Result<usize, String> {
+    match text.parse::<usize>() {
+        Ok(n) if (1..=slope_pipeline::config::MAX_THREADS).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "'{text}' must be a whole number of threads from 1 to 64"
+        )),
+    }
 }
 
 /// `--health-interval-s`: 0 (off) or 0.05-3600 seconds.
@@ -130,6 +146,9 @@ pub fn effective_config(args: &EstimatorArgs) -> anyhow::Result<SlopeFile> {
     }
     if let Some(interval) = args.health_interval {
         file.health.interval_s = interval;
+    }
+    if let Some(threads) = args.threads {
+        file.estimator.threads = threads;
     }
     file.validate().context("invalid settings")?;
     Ok(file)

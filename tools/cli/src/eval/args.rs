@@ -74,6 +74,11 @@ pub struct EvalArgs {
     #[arg(long)]
     pub seed: Option<u64>,
 
+    /// Threads each frame's stages may run on (1-64; default 1 or the
+    /// config file's); the estimates are the same for every count.
+    #[arg(long, value_parser = crate::estimator::threads_arg)]
+    pub threads: Option<usize>,
+
     /// Start from a named configuration instead of a file: default (ours)
     /// or paper-literal (the paper as written, every documented change
     /// off; slow; the same as pipeline/presets/paper-literal.toml).
@@ -176,6 +181,9 @@ pub fn configs(args: &EvalArgs) -> anyhow::Result<Vec<EstimatorConfig>> {
             };
             if let Some(seed) = args.seed {
                 config.seed = seed;
+            }
+            if let Some(threads) = args.threads {
+                config.threads = threads;
             }
             Ok(config)
         })

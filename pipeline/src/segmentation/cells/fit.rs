@@ -1,0 +1,186 @@
+//! The fit of a proposed region: the paper's RANSAC over the region's own
+//! sample points (three-point hypotheses scored by their consensus, each
+//! new best refitted by TLS on its inliers while its consensus grows, the
+//! adaptive count for `ransac.confidence`), then the TLS plane of the
+//! winner's inliers. The region's sample cells whose point is an inlier
+//! are the plane's.
+
+use nalgebra::Vector3;
+use rand::Rng;
+use rand_chacha::ChaCha8Rng;
+
+use crate::plane_fit::{fit_tls, Moments, Plane};
+use crate::ransac_planes::{RansacConfig, SampleCells, Threshold};
+
+/// Hypotheses are scored on at most this many of the region's points (a
+/// regular subset).
+const SCORE_POINTS: usize = 500;
+/// Hypotheses drawn per region at least.
+const MIN_HYPOTHESES: usize = 8;
+/// Local-optimisation refits of a new best, at most.
+const LO_STEPS: usize = 4;
+/// Refits of the winner on all the region's points, at most.
+const SETTLE_STEPS: usize = 8;
+
+/// The fit's buffers.
+#[derive(Debug, Default, Clone)]
+pub(super) struct RegionFit {
+    /// The region's sample points, their sample cells and inlier
+    /// distances.
+    points: Vec<Vector3<f64>>,
+    sample_cells: Vec<u32>,
+    limits: Vec<f64>,
+    /// The score subset: indices into `points`.
+    score: Vec<u32>,
+}
+
+impl RegionFit {
+    /// Fits the sample points of `region` (cells of a `k x k` block grid
+    /// `grid_w` wide over the sample grid) and labels its inlier sample
+    /// cells `label`; `None` (and no label) when no plane has 3 inliers.
+    #[allow(clippy::too_many_arguments)]
+    pub fn fit(
+        &mut self,
+        cells: &mut SampleCells<'_>,
+        (region, grid_w, k): (&[u32], usize, usize),
+        label: u16,
+        t: Threshold,
+        config: &RansacConfig,
+        rng: &mut ChaCha8Rng,
+    ) -> Option<Plane> {
+        self.gather(cells, region, grid_w, k, t);
+        let plane = self.settle(self.ransac(config, rng)?)?;
+        for ((p, &limit), &c) in self.points.iter().zip(&self.limits).zip(&self.sample_cells) {
+            if plane.signed_distance(p).abs() <= limit {
+                cells.labels[c as usize] = label;
+            }
+        }
+        Some(plane)
+    }
+
+    /// The TLS plane of `plane`'s inliers among all the region's points,
+    /// refitted on its own inliers until their count stops growing (a
+    /// fixed point that does not depend on which hypothesis won).
+    fn settle(&self, mut plane: Plane) -> Option<Plane> {
+        let mut count = 0;
+        for _ in 0..SETTLE_STEPS {
+            let mut moments = Moments::new();
+            for (p, &limit) in self.points.iter().zip(&self.limits) {
+                if plane.signed_distance(p).abs() <= limit {
+                    moments.add(p);
+                }
+            }
+            if moments.count() <= count {
+                break;
+            }
+            count = moments.count();
+            plane = fit_tls(&moments)?;
+        }
+        Some(plane)
+    }
+
+    /// The region's sample points (raster order within each cell).
+    fn gather(
+        &mut self,
+        cells: &SampleCells<'_>,
+        region: &[u32],
+        grid_w: usize,
+        k: usize,
+        t: Threshold,
+    ) {
+        self.points.clear();
+        self.sample_cells.clear();
+        self.limits.clear();
+        for &c in region {
+            let (cu, cv) = (c as usize % grid_w, c as usize / grid_w);
+            for row in cv * k..((cv + 1) * k).min(cells.height) {
+                for column in cu * k..((cu + 1) * k).min(cells.width) {
+                    let j = row * cells.width + column;
+                    let p = cells.points[j];
+                    if p.x.is_finite() {
+                        self.points.push(p);
+                        self.sample_cells.push(j as u32);
+                        self.limits.push(t.at(&p));
+                    }
+                }
+            }
+        }
+        let n = self.points.len();
+        let m = n.min(SCORE_POINTS);
+        self.score.clear();
+        self.score.extend((0..m).map(|i| (i * n / m.max(1)) as u32));
+    }
+
+    /// The consensus of `plane` on the score subset.
+    fn consensus(&self, plane: &Plane) -> usize {
+        self.score
+            .iter()
+            .filter(|&&j| {
+                plane.signed_distance(&self.points[j as usize]).abs() <= self.limits[j as usize]
+            })
+            .count()
+    }
+
+    /// The TLS plane of `plane`'s inliers in the score subset.
+    fn refit(&self, plane: &Plane) -> Option<Plane> {
+        let mut m = Moments::new();
+        for &j in &self.score {
+            let p = &self.points[j as usize];
+            if plane.signed_distance(p).abs() <= self.limits[j as usize] {
+                m.add(p);
+            }
+        }
+        fit_tls(&m)
+    }
+
+    /// RANSAC over the region's points: the best (locally optimised)
+    /// three-point hypothesis.
+    fn ransac(&self, config: &RansacConfig, rng: &mut ChaCha8Rng) -> Option<Plane> {
+        let n = self.points.len();
+        if n < 3 || self.score.is_empty() {
+            return None;
+        }
+        let log_fail = (1.0 - config.confidence).ln();
+        let mut needed = config.max_iterations;
+        let mut best: Option<(usize, Plane)> = None;
+        let mut it = 0;
+        while it < needed.max(MIN_HYPOTHESES).min(config.max_iterations) {
+            it += 1;
+            let (a, b, c) = (
+                rng.random_range(0..n),
+                rng.random_range(0..n),
+                rng.random_range(0..n),
+            );
+            if a == b || b == c || a == c {
+                continue;
+            }
+            let Some(plane) =
+                Plane::from_three_points(&self.points[a], &self.points[b], &self.points[c])
+            else {
+                continue;
+            };
+            let count = self.consensus(&plane);
+            if best.as_ref().is_some_and(|(s, _)| count <= *s) {
+                continue;
+            }
+            let (mut count, mut plane) = (count, plane);
+            for _ in 0..LO_STEPS {
+                let Some(refit) = self.refit(&plane) else {
+                    break;
+                };
+                let c = self.consensus(&refit);
+                if c <= count {
+                    break;
+                }
+                (count, plane) = (c, refit);
+            }
+            best = Some((count, plane));
+            let w = count as f64 / self.score.len() as f64;
+            let fail = (1.0 - w * w * w).ln();
+            if fail < 0.0 {
+                needed = (log_fail / fail).ceil().min(config.max_iterations as f64) as usize;
+            }
+        }
+        best.filter(|(s, _)| *s >= 3).map(|(_, p)| p)
+    }
+}

@@ -1,0 +1,174 @@
+//! The cell-grid segmentation on rendered scenes, against the scenes'
+//! own geometry.
+use nalgebra::Vector3;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+use crate::cloud::{angle_between_deg, to_vec3};
+use crate::fixtures::{Scene, SceneCloud, Surface};
+use crate::ransac_planes::{RansacConfig, SegmentedPlane, Threshold};
+use crate::segmentation::{Proposal, Segmentation, SegmentationConfig};
+
+/// The cell-grid design's parameters (the default design is sequential).
+fn cells() -> SegmentationConfig {
+    SegmentationConfig {
+        proposal: Proposal::Cells,
+        ..SegmentationConfig::default()
+    }
+}
+
+fn segment(cloud: &SceneCloud, ransac: &RansacConfig) -> Vec<SegmentedPlane> {
+    let keep: Vec<bool> = cloud.points.iter().map(|p| p.is_valid()).collect();
+    let mut rng = ChaCha8Rng::seed_from_u64(0);
+    Segmentation::new()
+        .segment(&cloud.view(), &keep, ransac, &cells(), &mut rng)
+        .to_vec()
+}
+
+/// `steps` steps of `rise_m` x `run_m` from 1.5 m ahead, seen from 0.6 m
+/// up, pitched 25 degrees down; surfaces: the floor, then riser, tread...
+fn stairs(steps: usize, rise_m: f64, run_m: f64) -> Scene {
+    const BIG: f64 = 1e6;
+    let foot = 1.5;
+    let mut scene = Scene::ramp_at(0.0, foot, 0.6, -25.0, 0.0);
+    scene.surfaces.truncate(1);
+    scene.surfaces[0].max.y = foot;
+    for s in 0..steps {
+        let y = foot + s as f64 * run_m;
+        let z = s as f64 * rise_m;
+        scene.surfaces.push(Surface {
+            normal: -Vector3::y(),
+            point: Vector3::new(0.0, y, z),
+            min: Vector3::new(-BIG, y - 1e-9, z),
+            max: Vector3::new(BIG, y + 1e-9, z + rise_m),
+        });
+        scene.surfaces.push(Surface {
+            normal: Vector3::z(),
+            point: Vector3::new(0.0, y, z + rise_m),
+            min: Vector3::new(-BIG, y, z + rise_m - 1e-9),
+            max: Vector3::new(BIG, y + run_m, z + rise_m + 1e-9),
+        });
+    }
+    scene
+}
+
+#[test]
+fn finds_ground_and_ramp_of_exact_geometry_and_labels_every_point() {
+    let scene = Scene::ramp(16.0);
+    let cloud = SceneCloud::render(&scene, 256, 212, 0.0, 2);
+    let cfg = RansacConfig {
+        min_plane_points: 200,
+        ..RansacConfig::default()
+    };
+    let planes = segment(&cloud, &cfg);
+    let up = scene.to_camera(&Vector3::z());
+    let ramp = scene.to_camera(&scene.surfaces[1].normal);
+    let find = |n: &Vector3<f64>| {
+        planes
+            .iter()
+            .find(|p| angle_between_deg(&p.plane.normal, n) < 0.01)
+    };
+    let (ground, incl) = (find(&up).expect("ground"), find(&ramp).expect("ramp"));
+    assert!((ground.plane.d - 0.5).abs() < 1e-4, "{}", ground.plane.d);
+    let measured = cloud.points.iter().filter(|p| p.is_valid()).count();
+    assert_eq!(ground.inliers.len() + incl.inliers.len(), measured);
+}
+
+#[test]
+fn every_inlier_is_within_the_threshold_of_its_plane_and_in_one_plane() {
+    let scene = stairs(4, 0.17, 0.28);
+    let cloud = SceneCloud::kinect2(&scene, 3);
+    let cfg = RansacConfig::default();
+    let planes = segment(&cloud, &cfg);
+    let t = Threshold::of(&cfg);
+    let mut owner = vec![usize::MAX; cloud.points.len()];
+    // The floor, four risers and the two treads seen from above (the
+    // third is 9 cm under the camera, the fourth above it).
+    assert!(planes.len() >= 7, "{} planes", planes.len());
+    for (k, plane) in planes.iter().enumerate() {
+        assert!(plane.inliers.is_sorted());
+        assert!(plane.inliers.len() >= cfg.min_plane_points);
+        // Labelled within the threshold of the plane before its final TLS
+        // refit on those pixels, which moves it by a fraction of it.
+        let mut within = 0;
+        for &i in &plane.inliers {
+            let p = to_vec3(&cloud.points[i as usize]);
+            let d = plane.plane.signed_distance(&p).abs();
+            assert!(d <= 1.5 * t.at(&p), "plane {k}: {d}");
+            within += usize::from(d <= t.at(&p));
+            assert_eq!(owner[i as usize], usize::MAX, "pixel {i} in two planes");
+            owner[i as usize] = k;
+        }
+        assert!(within as f64 >= 0.99 * plane.inliers.len() as f64);
+    }
+}
+
+#[test]
+fn finds_every_stair_riser_a_few_cells_tall() {
+    // 17 cm risers 1.5-2.4 m away: 25-40 px tall on a Kinect v2, three to
+    // five 8 px cells.
+    let scene = stairs(4, 0.17, 0.28);
+    let cloud = SceneCloud::kinect2(&scene, 1);
+    let planes = segment(&cloud, &RansacConfig::default());
+    let riser_normal = scene.to_camera(&-Vector3::y());
+    let up = scene.to_camera(&Vector3::z());
+    for (s, riser) in scene.surfaces.iter().skip(1).step_by(2).enumerate() {
+        // The riser's plane in the camera frame: n . p + d = 0.
+        let centre = (riser.min + riser.max) / 2.0;
+        let centre = Vector3::new(0.0, centre.y, centre.z);
+        let c = scene.to_camera(&(centre - scene.camera_centre()));
+        let found = planes.iter().find(|p| {
+            angle_between_deg(&p.plane.normal, &riser_normal) < 2.0
+                && p.plane.signed_distance(&c).abs() < 0.02
+        });
+        assert!(
+            found.is_some(),
+            "riser {s} not found among {} planes",
+            planes.len()
+        );
+    }
+    let floor = planes
+        .iter()
+        .find(|p| angle_between_deg(&p.plane.normal, &up) < 1.0 && (p.plane.d - 0.6).abs() < 0.02);
+    assert!(floor.is_some(), "no floor");
+}
+
+#[test]
+fn noisy_ramps_keep_their_orientation() {
+    for slope in [5.0, 16.0, 47.0] {
+        let scene = Scene::ramp(slope);
+        let cloud = SceneCloud::kinect2(&scene, 7);
+        let planes = segment(&cloud, &RansacConfig::default());
+        let ramp = scene.to_camera(&scene.surfaces[1].normal);
+        let up = scene.to_camera(&Vector3::z());
+        for n in [up, ramp] {
+            let best = planes
+                .iter()
+                .map(|p| angle_between_deg(&p.plane.normal, &n))
+                .fold(f64::INFINITY, f64::min);
+            assert!(best < 0.5, "slope {slope}: {best} deg off");
+        }
+    }
+}
+
+#[test]
+fn empty_and_tiny_input_give_no_plane_and_no_panic() {
+    for (w, h) in [(0, 0), (1, 1), (3, 2), (9, 9)] {
+        let scene = Scene::ramp(16.0);
+        let cloud = SceneCloud::render(&scene, w.max(1), h.max(1), 0.0, 2);
+        let mut keep: Vec<bool> = cloud.points.iter().map(|p| p.is_valid()).collect();
+        if w == 0 {
+            keep.clear();
+        }
+        let planes = Segmentation::new()
+            .segment(
+                &cloud.view(),
+                &keep,
+                &RansacConfig::default(),
+                &cells(),
+                &mut ChaCha8Rng::seed_from_u64(0),
+            )
+            .len();
+        assert_eq!(planes, 0, "{w}x{h}");
+    }
+}
