@@ -8,11 +8,13 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
-use slope_ipc_types::{CloudPoint, EstimateStatus};
+use slope_ipc_types::{CloudPoint, EstimateStatus, Intrinsics, SurfaceRole};
+use slope_pipeline::selection::{RoadScene, Surface};
 use slope_pipeline::{Estimate, Inspection};
 use slope_sensor::recording::ColorImage;
 
-use crate::overlay::{render_overlay, NormalDot, Overlay, Role};
+use crate::overlay::{render_overlay, NormalDot, Overlay, Role, SurfacePixels};
+use crate::overlay_marks::{boundary_pixels, corridor_segments};
 use crate::ply::{write_labelled_cloud, LabelledCloud};
 use crate::render::write_png;
 
@@ -28,6 +30,8 @@ pub struct Snapshot<'a> {
     pub points: &'a [CloudPoint],
     pub width: u32,
     pub height: u32,
+    /// The depth camera's, to project the corridor.
+    pub intrinsics: Intrinsics,
     pub estimate: &'a Estimate,
     pub inspection: Inspection<'a>,
     pub truth_deg: Option<f64>,
@@ -103,7 +107,9 @@ pub fn caption_lines(s: &Snapshot<'_>) -> Vec<String> {
     lines
 }
 
-/// The overlay picture of a snapshot.
+/// The overlay picture of a snapshot: its surfaces by role, the road's
+/// outline and the corridor when the estimator saw the scene, else its
+/// planes unclassified.
 pub fn overlay_of(s: &Snapshot<'_>) -> ColorImage {
     let dots: Vec<NormalDot> = s
         .inspection
@@ -114,21 +120,84 @@ pub fn overlay_of(s: &Snapshot<'_>) -> ColorImage {
             kept: n.kept,
         })
         .collect();
-    let planes = s
-        .inspection
-        .planes
-        .iter()
-        .enumerate()
-        .map(|(k, p)| (p.inliers.as_slice(), s.role(k)))
-        .collect();
+    let (w, h) = (s.width as usize, s.height as usize);
+    let (surfaces, road_outline, corridor) = match &s.estimate.scene {
+        Some(scene) => {
+            let surfaces: Vec<SurfacePixels<'_>> = scene
+                .surfaces
+                .iter()
+                .map(|surface| surface_pixels(s, surface))
+                .collect();
+            let outline = scene
+                .road
+                .and_then(|r| surfaces.get(r.surface))
+                .map(|road| boundary_pixels(&road.pixels, w, h))
+                .unwrap_or_default();
+            (surfaces, outline, corridor_of(s, scene))
+        }
+        None => {
+            let planes = s.inspection.planes.iter().map(|p| SurfacePixels {
+                pixels: vec![p.inliers.as_slice()],
+                role: None,
+                label: String::new(),
+            });
+            (planes.collect(), Vec::new(), Vec::new())
+        }
+    };
     render_overlay(&Overlay {
         points: s.points,
         width: s.width,
         height: s.height,
-        planes,
+        surfaces,
+        road_outline,
+        corridor,
         normals: &dots,
         caption: caption_lines(s),
     })
+}
+
+/// A surface's pixels (the ground's: every segment's) and its label: role
+/// and slope (the ground's slope, 0 by definition, is left out).
+fn surface_pixels<'a>(s: &Snapshot<'a>, surface: &Surface) -> SurfacePixels<'a> {
+    let planes = s.inspection.planes;
+    let indices: Vec<usize> = if surface.role == SurfaceRole::Ground && surface.segments > 1 {
+        s.inspection.ground.to_vec()
+    } else {
+        vec![surface.plane_index]
+    };
+    let label = if surface.role == SurfaceRole::Ground {
+        surface.role.name().to_string()
+    } else {
+        format!("{} {:.1}°", surface.role.name(), surface.slope_deg)
+    };
+    SurfacePixels {
+        pixels: indices
+            .iter()
+            .filter_map(|&k| planes.get(k))
+            .map(|p| p.inliers.as_slice())
+            .collect(),
+        role: Some(surface.role),
+        label,
+    }
+}
+
+/// The corridor's edges from the nearest ground in view (the camera's
+/// foot when no ground plane was seen) to the look-ahead.
+fn corridor_of(s: &Snapshot<'_>, scene: &RoadScene) -> Vec<crate::overlay_marks::Segment> {
+    let near = scene
+        .surfaces
+        .iter()
+        .find(|x| x.role == SurfaceRole::Ground)
+        .map(|g| g.distance_m)
+        .filter(|d| d.is_finite())
+        .unwrap_or(0.0);
+    corridor_segments(
+        &scene.frame,
+        &s.intrinsics,
+        (s.width, s.height),
+        scene.corridor_half_width_m,
+        (near, scene.look_ahead_m),
+    )
 }
 
 /// Which frames get pictures and clouds, and where they go.

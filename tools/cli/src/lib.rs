@@ -18,6 +18,7 @@ pub mod health;
 pub mod mcap_export;
 pub mod mount_args;
 pub mod overlay;
+pub mod overlay_marks;
 pub mod plot;
 pub mod ply;
 pub mod record;
