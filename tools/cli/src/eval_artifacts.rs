@@ -273,3 +273,132 @@ fn write_ply(path: &Path, s: &Snapshot<'_>) -> anyhow::Result<()> {
     write_labelled_cloud(path, &cloud)
         .with_context(|| format!("cannot export frame {} of {}", s.index, s.recording))
 }
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use nalgebra::Vector3;
+    use slope_ipc_types::SlopeMethod;
+    use slope_pipeline::{CloudView, Estimator, EstimatorConfig, FrameInfo};
+    use slope_sensor::recording::{DepthImage, Recording};
+
+    use super::*;
+    use crate::overlay::{tint_role, to_output, SCALE};
+    use crate::render::{CORRIDOR_LINE, ROAD_OUTLINE};
+
+    /// The bundled clean 16° ramp (foot 1.5 m ahead, 3 m wide; camera
+    /// 0.5 m high, 20° down), frame 0, rendered as `slope-eval` does.
+    fn ramp16_clean() -> (ColorImage, Estimate) {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/recordings/ramp16-clean");
+        let recording = Recording::open(&dir).expect("recording");
+        let frame = recording.frames()[0].clone();
+        let mut depth = DepthImage::default();
+        recording
+            .read_depth_into(&frame, &mut depth)
+            .expect("depth");
+        let projector = recording.projector();
+        let mut points = vec![CloudPoint::INVALID; projector.len()];
+        projector.project_into(&depth.data, None, &mut points);
+        let (w, h) = (depth.width, depth.height);
+        let view = CloudView {
+            points: &points,
+            width: w as usize,
+            height: h as usize,
+            intrinsics: recording.intrinsics(),
+            mount: recording.mount(),
+        };
+        // Least squares: no sampled normals' dots over the surfaces.
+        let mut estimator = Estimator::new(EstimatorConfig {
+            method: SlopeMethod::LeastSquares,
+            ..EstimatorConfig::default()
+        });
+        let estimate = estimator.estimate_frame(
+            &view,
+            FrameInfo {
+                index: 0,
+                stamp_ns: frame.timestamp_ns,
+            },
+        );
+        let snapshot = Snapshot {
+            recording: "ramp16-clean",
+            name: "ramp16-clean",
+            index: 0,
+            points: &points,
+            width: w,
+            height: h,
+            intrinsics: recording.intrinsics(),
+            estimate: &estimate,
+            inspection: estimator.inspection(),
+            truth_deg: Some(16.0),
+        };
+        (overlay_of(&snapshot), estimate)
+    }
+
+    /// Share of the output pixels in depth rows `rows`, columns `cols`
+    /// whose tint is `role`'s.
+    fn share(image: &ColorImage, rows: (u32, u32), cols: (u32, u32), role: SurfaceRole) -> f64 {
+        let (mut hit, mut all) = (0, 0);
+        for v in rows.0 * SCALE..rows.1 * SCALE {
+            for u in cols.0 * SCALE..cols.1 * SCALE {
+                all += 1;
+                hit += usize::from(image.get(u, v).and_then(tint_role) == Some(role));
+            }
+        }
+        hit as f64 / all as f64
+    }
+
+    /// The ramp's pixels (rows above its foot line, v < 201.5 at the
+    /// centre: the ray 18.4° down) are blue, the ground's red; the corridor
+    /// lies on the lines the true camera projects (`up` = (0, -cos 20°,
+    /// -sin 20°), 0.5 m above the ground) to 2 px; the road's outline runs
+    /// along the ramp's foot.
+    #[test]
+    fn a_rendered_ramp_has_its_colours_corridor_and_outline_where_the_geometry_puts_them() {
+        let (image, estimate) = ramp16_clean();
+        let scene = estimate.scene.as_ref().expect("a scene");
+        let road = scene.road_surface().expect("a road");
+        assert_eq!(road.role, SurfaceRole::Ramp);
+        // Rows 150..195 at the centre see the ramp (its top edge is off the
+        // image's top at 16°: 4.5 m ahead, 1.4 m up), 230..420 the ground;
+        // labels cover a few per cent.
+        let ramp = share(&image, (150, 195), (180, 330), SurfaceRole::Ramp);
+        let ground = share(&image, (230, 420), (20, 490), SurfaceRole::Ground);
+        assert!(ramp > 0.9, "ramp share {ramp}");
+        assert!(ground > 0.9, "ground share {ground}");
+        // The corridor: ground points at lateral ±half width, projected
+        // with the recording's intrinsics and the true pose.
+        let t = 20f64.to_radians();
+        let up = Vector3::new(0.0, -t.cos(), -t.sin());
+        let forward = Vector3::new(0.0, -t.sin(), t.cos());
+        let right = Vector3::new(1.0, 0.0, 0.0);
+        let near = |x: f64, y: f64, colour: [u8; 3], r: i64| {
+            (-r..=r).any(|dy| {
+                (-r..=r).any(|dx| {
+                    let (u, v) = (x.round() as i64 + dx, y.round() as i64 + dy);
+                    u >= 0 && v >= 0 && image.get(u as u32, v as u32) == Some(colour)
+                })
+            })
+        };
+        let l = scene.corridor_half_width_m;
+        for lateral in [-l, l] {
+            for ahead in [0.7, 1.0, 1.3, 2.0, 3.0] {
+                let p = forward * ahead + right * lateral - up * 0.5;
+                let u = 365.0 * p.x / p.z + 255.5;
+                let v = 365.0 * p.y / p.z + 211.5;
+                let (x, y) = (to_output(u), to_output(v));
+                assert!(
+                    near(x, y, CORRIDOR_LINE, 2),
+                    "no corridor within 2 px of ({x:.1}, {y:.1}) ({lateral} m, {ahead} m)"
+                );
+            }
+        }
+        // Away from the lines: none.
+        assert!(!near(to_output(255.5), to_output(300.0), CORRIDOR_LINE, 6));
+        // The outline along the foot (depth row 201.5 at every column the
+        // ramp spans): within 3 depth rows of it at the centre, and long.
+        assert!(near(to_output(255.5), to_output(201.5), ROAD_OUTLINE, 6));
+        let outline = image.data.iter().filter(|&&p| p == ROAD_OUTLINE).count();
+        assert!(outline > 2 * 512, "{outline} outline pixels");
+    }
+}

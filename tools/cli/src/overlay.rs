@@ -389,6 +389,25 @@ fn mix(base: [u8; 3], colour: [u8; 3], weight: f32) -> [u8; 3] {
     out
 }
 
+/// The role whose tint over some grey best explains `p`: `p - w * c`
+/// is nearest the grey axis for the right colour `c`.
+#[cfg(test)]
+pub(crate) fn tint_role(p: [u8; 3]) -> Option<SurfaceRole> {
+    let residual = |c: [u8; 3]| {
+        let q: Vec<f64> = (0..3)
+            .map(|k| f64::from(p[k]) - f64::from(PLANE_WEIGHT) * f64::from(c[k]))
+            .collect();
+        let mean = q.iter().sum::<f64>() / 3.0;
+        q.iter().map(|x| (x - mean).powi(2)).sum::<f64>()
+    };
+    SurfaceRole::ALL
+        .into_iter()
+        .map(|r| (r, residual(role_colour(r))))
+        .filter(|(_, e)| *e < 3.0)
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(r, _)| r)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -413,24 +432,6 @@ mod tests {
             .flat_map(|v| (0..30).map(move |u| v * w + u))
             .collect();
         (points, ground, inclined, other)
-    }
-
-    /// The role whose tint over some grey best explains `p`: `p - w * c`
-    /// is nearest the grey axis for the right colour `c`.
-    pub(crate) fn tint_role(p: [u8; 3]) -> Option<SurfaceRole> {
-        let residual = |c: [u8; 3]| {
-            let q: Vec<f64> = (0..3)
-                .map(|k| f64::from(p[k]) - f64::from(PLANE_WEIGHT) * f64::from(c[k]))
-                .collect();
-            let mean = q.iter().sum::<f64>() / 3.0;
-            q.iter().map(|x| (x - mean).powi(2)).sum::<f64>()
-        };
-        SurfaceRole::ALL
-            .into_iter()
-            .map(|r| (r, residual(role_colour(r))))
-            .filter(|(_, e)| *e < 3.0)
-            .min_by(|a, b| a.1.total_cmp(&b.1))
-            .map(|(r, _)| r)
     }
 
     #[test]
