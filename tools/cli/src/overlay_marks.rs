@@ -166,7 +166,7 @@ fn clip_to_rect(s: Segment, (x0, y0, x1, y1): (f64, f64, f64, f64)) -> Option<Se
         }
     }
     (t0 <= t1 && t0.is_finite() && t1.is_finite())
-        .then(|| [(ax + t0 * dx, ay + t0 * dy), (ax + t1 * dx, ay + t1 * dy)])
+        .then_some([(ax + t0 * dx, ay + t0 * dy), (ax + t1 * dx, ay + t1 * dy)])
 }
 
 #[cfg(test)]
