@@ -281,7 +281,8 @@ mod tests {
     use nalgebra::Vector3;
     use slope_ipc_types::SlopeMethod;
     use slope_pipeline::{CloudView, Estimator, EstimatorConfig, FrameInfo};
-    use slope_sensor::recording::{DepthImage, Recording};
+    use slope_sensor::recording::{DepthImage, PngCompression, Recording};
+    use slope_synth::{load_scene_file, write_recording_with, SensorModel, WriteOptions};
 
     use super::*;
     use crate::overlay::{tint_role, to_output, SCALE};
@@ -290,8 +291,14 @@ mod tests {
     /// The bundled clean 16° ramp (foot 1.5 m ahead, 3 m wide; camera
     /// 0.5 m high, 20° down), frame 0, rendered as `slope-eval` does.
     fn ramp16_clean() -> (ColorImage, Estimate) {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/recordings/ramp16-clean");
-        let recording = Recording::open(&dir).expect("recording");
+        render_first_frame(
+            &Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/recordings/ramp16-clean"),
+        )
+    }
+
+    /// Frame 0 of the recording in `dir`, rendered as `slope-eval` does.
+    fn render_first_frame(dir: &Path) -> (ColorImage, Estimate) {
+        let recording = Recording::open(dir).expect("recording");
         let frame = recording.frames()[0].clone();
         let mut depth = DepthImage::default();
         recording
@@ -400,5 +407,74 @@ mod tests {
         assert!(near(to_output(255.5), to_output(201.5), ROAD_OUTLINE, 6));
         let outline = image.data.iter().filter(|&&p| p == ROAD_OUTLINE).count();
         assert!(outline > 2 * 512, "{outline} outline pixels");
+    }
+
+    /// The camera-frame point of world point `(x right, y ahead, z up)`
+    /// for the synthetic camera 0.5 m high looking 20° down, projected
+    /// into output pixels with the Kinect v2 intrinsics of the scenes.
+    fn world_to_output(x: f64, y: f64, z: f64) -> (u32, u32) {
+        let t = 20f64.to_radians();
+        let up = Vector3::new(0.0, -t.cos(), -t.sin());
+        let forward = Vector3::new(0.0, -t.sin(), t.cos());
+        let p = Vector3::new(x, 0.0, 0.0) + forward * y + up * (z - 0.5);
+        let u = 365.0 * p.x / p.z + 255.5;
+        let v = 365.0 * p.y / p.z + 211.5;
+        (to_output(u).round() as u32, to_output(v).round() as u32)
+    }
+
+    /// `slope-synth`'s ramp with a wall beside the path, one clean frame:
+    /// the wall's pixels (near its upper left corner, away from its
+    /// label) are brown, the ramp's (left of its centre line) blue, and
+    /// the ramp is the road.
+    #[test]
+    fn a_synthetic_wall_beside_a_ramp_is_drawn_in_the_wall_colour() {
+        let scene = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../synth/tests/scenes/ramp_wall_beside_path.toml");
+        let scene = load_scene_file(&scene).expect("scene").scene;
+        let dir = tempfile::tempdir().expect("temp dir");
+        let options = WriteOptions {
+            color: false,
+            compression: PngCompression::Fast,
+        };
+        write_recording_with(
+            &scene,
+            &SensorModel::clean(),
+            1,
+            5,
+            dir.path(),
+            options,
+            |_| std::ops::ControlFlow::Continue(()),
+        )
+        .expect("recording written");
+        let (image, estimate) = render_first_frame(dir.path());
+        let scene = estimate.scene.as_ref().expect("a scene");
+        assert_eq!(
+            scene.road_surface().map(|r| r.role),
+            Some(SurfaceRole::Ramp)
+        );
+        let around = |(x, y): (u32, u32)| {
+            let mut roles = Vec::new();
+            for v in y - 4..=y + 4 {
+                for u in x - 4..=x + 4 {
+                    roles.push(image.get(u, v).and_then(tint_role));
+                }
+            }
+            roles
+        };
+        // The wall's face: lower edge (0.60, 2.00) -> (1.37, 2.64), 0.7 m
+        // high; a tenth along it, 0.6 m up.
+        let wall = around(world_to_output(0.677, 2.064, 0.6));
+        let walls = wall
+            .iter()
+            .filter(|r| **r == Some(SurfaceRole::Wall))
+            .count();
+        assert!(walls * 10 >= wall.len() * 9, "{wall:?}");
+        // The ramp: foot at 2.2 m, rising 16°; 0.4 m left, 2.7 m ahead.
+        let ramp = around(world_to_output(-0.4, 2.7, 0.5 * 16f64.to_radians().tan()));
+        let ramps = ramp
+            .iter()
+            .filter(|r| **r == Some(SurfaceRole::Ramp))
+            .count();
+        assert!(ramps * 10 >= ramp.len() * 9, "{ramp:?}");
     }
 }
