@@ -13,7 +13,7 @@ pub const MIN_DEPTH_M: f64 = 0.05;
 
 /// Holes up to this many pixels across are closed in a surface's mask
 /// before its boundary is taken (noise leaves single missing inliers).
-const CLOSE_RADIUS: usize = 2;
+pub const CLOSE_RADIUS: usize = 2;
 
 /// A line segment in depth-pixel coordinates `(u, v)` (pixel centres at
 /// integers).
