@@ -20,6 +20,7 @@ pub mod mcap_export;
 pub mod mount_args;
 pub mod mount_transform;
 pub mod overlay;
+pub mod overlay_marks;
 pub mod plot;
 pub mod ply;
 pub mod record;

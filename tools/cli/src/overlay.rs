@@ -1,17 +1,22 @@
 //! The overlay of one frame (`slope-eval --render`): the depth image in
-//! grey, every segmented plane in its own colour (the ground red, the
-//! inclined plane blue, the others muted), "ground" and "inclined" written
-//! on their planes, the normals the paper method sampled as dots (kept:
-//! green, dropped by the cosine k-means: yellow), and a caption under the
-//! image with the slope, its spread, the confidence and the status.
+//! grey, every surface the estimator saw tinted in its role's colour
+//! ([`crate::render::ROLE_COLOURS`]) and labelled with its role and slope
+//! (`ramp 16.0°`), the road's boundary in [`ROAD_OUTLINE`], the robot's
+//! corridor drawn on the ground in [`CORRIDOR_LINE`], the normals the paper
+//! method sampled as dots (kept: green, dropped by the cosine k-means:
+//! yellow), and a caption under the image with the slope, its spread, the
+//! confidence and the status, then the legend.
 //!
 //! [`render_overlay`] is pure (data in, image out); drawn at
 //! [`SCALE`] times the depth resolution so that the text stays readable.
 
-use slope_ipc_types::CloudPoint;
+use slope_ipc_types::{CloudPoint, SurfaceRole};
 use slope_sensor::recording::ColorImage;
 
-use crate::render::{grey_levels, GROUND_TINT, INCLINED_TINT};
+use crate::overlay_marks::Segment;
+use crate::render::{
+    grey_levels, role_colour, CORRIDOR_LINE, GROUND_TINT, INCLINED_TINT, ROAD_OUTLINE, UNCLASSIFIED,
+};
 use crate::text::{draw_label, draw_text, fill_rect, text_width};
 
 /// Output pixels per depth pixel, in each direction.
@@ -20,7 +25,8 @@ pub const SCALE: u32 = 2;
 pub const KEPT_NORMAL: [u8; 3] = [40, 230, 60];
 /// Colour of a dropped normal's dot.
 pub const DROPPED_NORMAL: [u8; 3] = [255, 220, 0];
-/// Colours of the other planes, in the order they were segmented.
+/// Colours of the other planes in the labelled cloud (`--export-ply`), in
+/// the order they were segmented.
 pub const OTHER_PLANES: [[u8; 3]; 6] = [
     [150, 110, 200],
     [90, 170, 160],
@@ -29,10 +35,14 @@ pub const OTHER_PLANES: [[u8; 3]; 6] = [
     [120, 160, 90],
     [110, 130, 180],
 ];
-/// Share of a plane's colour in its pixels (the rest is the depth grey).
-const PLANE_WEIGHT: f32 = 0.6;
+/// Share of a surface's colour in its pixels (the rest is the depth grey).
+pub const PLANE_WEIGHT: f32 = 0.6;
+/// Width of the corridor's lines, output pixels.
+pub const LINE_PX: i64 = 3;
 /// Caption text height, output pixels.
 const TEXT_PX: f32 = 22.0;
+/// Label text height, output pixels.
+const LABEL_PX: f32 = 20.0;
 /// At most this many kept and this many dropped normals are drawn (an even
 /// share of each).
 const KEPT_DOTS: usize = 700;
@@ -46,7 +56,7 @@ pub const LABEL_EDGE: usize = 4;
 /// the pixels where it fits, the one nearest the plane's centroid is taken.
 const LABEL_COVERAGE: f64 = 0.9;
 
-/// What a plane is in the picture.
+/// What a plane is in the labelled cloud (`--export-ply`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Role {
     Ground,
@@ -62,20 +72,36 @@ pub struct NormalDot {
     pub kept: bool,
 }
 
+/// One surface in the picture.
+#[derive(Debug, Clone)]
+pub struct SurfacePixels<'a> {
+    /// Its pixels: the inliers of each of its segmented planes.
+    pub pixels: Vec<&'a [u32]>,
+    /// `None` for a plane no surface holds (no roles in that frame).
+    pub role: Option<SurfaceRole>,
+    /// Written on it; empty for none.
+    pub label: String,
+}
+
 /// Everything one overlay shows.
 #[derive(Debug, Clone)]
 pub struct Overlay<'a> {
     pub points: &'a [CloudPoint],
     pub width: u32,
     pub height: u32,
-    /// Every segmented plane: its inlier pixels and its role.
-    pub planes: Vec<(&'a [u32], Role)>,
+    /// Every surface, drawn in order (a later one over an earlier one).
+    pub surfaces: Vec<SurfacePixels<'a>>,
+    /// The road's boundary pixels ([`crate::overlay_marks::boundary_pixels`]).
+    pub road_outline: Vec<u32>,
+    /// The corridor's edges, depth-pixel coordinates
+    /// ([`crate::overlay_marks::corridor_segments`]).
+    pub corridor: Vec<Segment>,
     pub normals: &'a [NormalDot],
     /// Caption lines, top to bottom.
     pub caption: Vec<String>,
 }
 
-/// The colour of the `k`-th plane with `role`.
+/// The colour of the `k`-th plane with `role` in the labelled cloud.
 pub fn plane_colour(k: usize, role: Role) -> [u8; 3] {
     match role {
         Role::Ground => GROUND_TINT,
@@ -84,63 +110,118 @@ pub fn plane_colour(k: usize, role: Role) -> [u8; 3] {
     }
 }
 
+/// The colour a surface is tinted in.
+pub fn surface_colour(role: Option<SurfaceRole>) -> [u8; 3] {
+    role.map_or(UNCLASSIFIED, role_colour)
+}
+
+/// The output-pixel coordinate of depth-pixel coordinate `x` (the centre
+/// of depth pixel `k` is the centre of its `SCALE` x `SCALE` block).
+pub fn to_output(x: f64) -> f64 {
+    (x + 0.5) * f64::from(SCALE) - 0.5
+}
+
 /// Renders the overlay: `SCALE * width` wide, `SCALE * height` plus the
 /// caption high. Pixel indices outside the cloud are ignored.
 pub fn render_overlay(o: &Overlay<'_>) -> ColorImage {
     let (w, h) = (o.width as usize, o.height as usize);
     let mut base = grey_levels(o.points, o.width, o.height);
-    for (k, (inliers, role)) in o.planes.iter().enumerate() {
-        let colour = plane_colour(k, *role);
-        for &i in inliers.iter() {
+    for surface in &o.surfaces {
+        let colour = surface_colour(surface.role);
+        for &i in surface.pixels.iter().flat_map(|p| p.iter()) {
             if let Some(pixel) = base.get_mut(i as usize) {
                 *pixel = mix(*pixel, colour, PLANE_WEIGHT);
             }
         }
     }
-    let caption_h = caption_height(o.caption.len() + 1);
+    let caption_h = caption_height(o.caption.len() + 2);
     let (ow, oh) = (o.width * SCALE, o.height * SCALE);
     let mut image = ColorImage::new(ow, oh + caption_h);
+    let s = SCALE as usize;
     for v in 0..oh as usize {
         for u in 0..ow as usize {
-            let s = SCALE as usize;
             image.data[v * ow as usize + u] = base[(v / s) * w + u / s];
         }
     }
-    draw_normals(&mut image, o.normals, w, h);
-    for (inliers, role) in &o.planes {
-        let name = match role {
-            Role::Ground => "ground",
-            Role::Inclined => "inclined",
-            Role::Other => continue,
-        };
-        let margin = (TEXT_PX * 0.25).round();
-        let box_px = (
-            text_width(name, TEXT_PX) + 2.0 * margin,
-            TEXT_PX * 1.2 + 2.0 * margin,
+    for &p in &o.road_outline {
+        let (u, v) = (
+            (p as usize % w.max(1)) as i64,
+            (p as usize / w.max(1)) as i64,
         );
-        // The label box in depth pixels, rounded up.
-        let box_depth = (
-            (box_px.0 / SCALE as f32).ceil() as usize,
-            (box_px.1 / SCALE as f32).ceil() as usize,
-        );
-        if let Some(place) = label_anchor(inliers, w, h, box_depth) {
-            // The text box centred in the depth-pixel box the anchor chose.
-            let (u0, v0) = place.top_left;
-            let x = u0 as f32 * SCALE as f32 + (box_depth.0 as f32 * SCALE as f32 - box_px.0) / 2.0;
-            let y = v0 as f32 * SCALE as f32 + (box_depth.1 as f32 * SCALE as f32 - box_px.1) / 2.0;
-            draw_label(
-                &mut image,
-                x + margin,
-                y + margin,
-                TEXT_PX,
-                [255, 255, 255],
-                plane_colour(0, *role),
-                name,
-            );
+        if v < h as i64 {
+            let (x, y) = (u * i64::from(SCALE), v * i64::from(SCALE));
+            let side = i64::from(SCALE);
+            fill_rect(&mut image, x, y, x + side, y + side, ROAD_OUTLINE);
         }
+    }
+    for segment in &o.corridor {
+        draw_segment(&mut image, *segment, oh, CORRIDOR_LINE);
+    }
+    draw_normals(&mut image, o.normals, w, h);
+    for surface in o.surfaces.iter().filter(|s| !s.label.is_empty()) {
+        draw_surface_label(&mut image, surface, w, h);
     }
     draw_caption(&mut image, oh, &o.caption);
     image
+}
+
+/// A line [`LINE_PX`] wide along `segment` (depth-pixel coordinates), on
+/// the picture's top `height` rows.
+fn draw_segment(image: &mut ColorImage, segment: Segment, height: u32, colour: [u8; 3]) {
+    let [(u0, v0), (u1, v1)] = segment;
+    let (x0, y0, x1, y1) = (to_output(u0), to_output(v0), to_output(u1), to_output(v1));
+    let length = (x1 - x0).hypot(y1 - y0);
+    if !length.is_finite() {
+        return;
+    }
+    // Steps of a quarter pixel: every pixel the line crosses is hit.
+    let steps = (length * 4.0).ceil().max(1.0) as usize;
+    let half = LINE_PX / 2;
+    for k in 0..=steps {
+        let t = k as f64 / steps as f64;
+        let (x, y) = (
+            (x0 + t * (x1 - x0)).round() as i64,
+            (y0 + t * (y1 - y0)).round() as i64,
+        );
+        let bottom = (y + half + 1).min(i64::from(height));
+        fill_rect(image, x - half, y - half, x + half + 1, bottom, colour);
+    }
+}
+
+/// A surface's label on its own pixels, nearest its centroid, on a box of
+/// its colour.
+fn draw_surface_label(image: &mut ColorImage, surface: &SurfacePixels<'_>, w: usize, h: usize) {
+    let margin = (LABEL_PX * 0.25).round();
+    let box_px = (
+        text_width(&surface.label, LABEL_PX) + 2.0 * margin,
+        LABEL_PX * 1.2 + 2.0 * margin,
+    );
+    // The label box in depth pixels, rounded up.
+    let box_depth = (
+        (box_px.0 / SCALE as f32).ceil() as usize,
+        (box_px.1 / SCALE as f32).ceil() as usize,
+    );
+    let pixels: Vec<u32> = surface
+        .pixels
+        .iter()
+        .flat_map(|p| p.iter().copied())
+        .collect();
+    let Some(place) = label_anchor(&pixels, w, h, box_depth) else {
+        return;
+    };
+    // The text box centred in the depth-pixel box the anchor chose.
+    let (u0, v0) = place.top_left;
+    let x = u0 as f32 * SCALE as f32 + (box_depth.0 as f32 * SCALE as f32 - box_px.0) / 2.0;
+    let y = v0 as f32 * SCALE as f32 + (box_depth.1 as f32 * SCALE as f32 - box_px.1) / 2.0;
+    draw_label(
+        image,
+        x + margin,
+        y + margin,
+        LABEL_PX,
+        [255, 255, 255],
+        surface_colour(surface.role),
+        &surface.label,
+    );
 }
 
 /// Height of a caption of `lines` lines (the legend included), pixels.
@@ -148,7 +229,8 @@ fn caption_height(lines: usize) -> u32 {
     ((lines as f32) * TEXT_PX * 1.4 + TEXT_PX * 0.6).ceil() as u32
 }
 
-/// The caption lines and the colour legend, under the picture.
+/// The caption lines and the colour legend (the roles on one line, the
+/// marks on the next), under the picture.
 fn draw_caption(image: &mut ColorImage, top: u32, lines: &[String]) {
     let width = i64::from(image.width);
     fill_rect(
@@ -165,19 +247,25 @@ fn draw_caption(image: &mut ColorImage, top: u32, lines: &[String]) {
         draw_text(image, x0, y, TEXT_PX, CAPTION_FG, line);
         y += TEXT_PX * 1.4;
     }
-    let legend = [
-        (GROUND_TINT, "ground"),
-        (INCLINED_TINT, "inclined"),
-        (OTHER_PLANES[0], "other planes"),
+    let roles: Vec<([u8; 3], &str)> = SurfaceRole::ALL
+        .iter()
+        .map(|&r| (role_colour(r), r.name()))
+        .collect();
+    let marks = [
+        (ROAD_OUTLINE, "road outline"),
+        (CORRIDOR_LINE, "corridor"),
         (KEPT_NORMAL, "kept normals"),
         (DROPPED_NORMAL, "dropped normals"),
     ];
-    let mut x = x0;
-    for (colour, name) in legend {
-        let side = (TEXT_PX * 0.8) as i64;
-        let top = (y + TEXT_PX * 0.2) as i64;
-        fill_rect(image, x as i64, top, x as i64 + side, top + side, colour);
-        x = draw_text(image, x + side as f32 + 6.0, y, TEXT_PX, CAPTION_FG, name) + TEXT_PX;
+    for legend in [&roles[..], &marks[..]] {
+        let mut x = x0;
+        for &(colour, name) in legend {
+            let side = (TEXT_PX * 0.8) as i64;
+            let top = (y + TEXT_PX * 0.2) as i64;
+            fill_rect(image, x as i64, top, x as i64 + side, top + side, colour);
+            x = draw_text(image, x + side as f32 + 6.0, y, TEXT_PX, CAPTION_FG, name) + TEXT_PX;
+        }
+        y += TEXT_PX * 1.4;
     }
 }
 
@@ -301,6 +389,25 @@ fn mix(base: [u8; 3], colour: [u8; 3], weight: f32) -> [u8; 3] {
     out
 }
 
+/// The role whose tint over some grey best explains `p`: `p - w * c`
+/// is nearest the grey axis for the right colour `c`.
+#[cfg(test)]
+pub(crate) fn tint_role(p: [u8; 3]) -> Option<SurfaceRole> {
+    let residual = |c: [u8; 3]| {
+        let q: Vec<f64> = (0..3)
+            .map(|k| f64::from(p[k]) - f64::from(PLANE_WEIGHT) * f64::from(c[k]))
+            .collect();
+        let mean = q.iter().sum::<f64>() / 3.0;
+        q.iter().map(|x| (x - mean).powi(2)).sum::<f64>()
+    };
+    SurfaceRole::ALL
+        .into_iter()
+        .map(|r| (r, residual(role_colour(r))))
+        .filter(|(_, e)| *e < 3.0)
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(r, _)| r)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -327,12 +434,8 @@ mod tests {
         (points, ground, inclined, other)
     }
 
-    fn dominant(p: [u8; 3]) -> usize {
-        (0..3).max_by_key(|&c| p[c]).unwrap_or(0)
-    }
-
     #[test]
-    fn each_plane_has_its_colour_and_the_caption_its_text() {
+    fn each_surface_has_its_role_colour_and_the_marks_theirs() {
         let (points, ground, inclined, other) = scene();
         let normals = [
             NormalDot {
@@ -344,34 +447,59 @@ mod tests {
                 kept: false,
             },
         ];
+        fn surface<'a>(pixels: &'a [u32], role: SurfaceRole, label: &str) -> SurfacePixels<'a> {
+            SurfacePixels {
+                pixels: vec![pixels],
+                role: Some(role),
+                label: label.to_string(),
+            }
+        }
+        let (ground_a, ground_b) = ground.split_at(ground.len() / 2);
         let overlay = Overlay {
             points: &points,
             width: 120,
             height: 90,
-            planes: vec![
-                (&ground, Role::Ground),
-                (&inclined, Role::Inclined),
-                (&other, Role::Other),
+            surfaces: vec![
+                SurfacePixels {
+                    pixels: vec![ground_a, ground_b],
+                    role: Some(SurfaceRole::Ground),
+                    label: "ground".into(),
+                },
+                surface(&inclined, SurfaceRole::Ramp, "ramp 16.0°"),
+                surface(&other, SurfaceRole::Wall, ""),
             ],
+            road_outline: vec![44 * 120 + 100],
+            corridor: vec![[(10.0, 80.0), (40.0, 50.0)]],
             normals: &normals,
             caption: vec!["slope +16.02° ± 0.20°".into(), "confidence 1.00".into()],
         };
         let image = render_overlay(&overlay);
         assert_eq!(image.width, 240);
         assert!(image.height > 180);
-        // Away from the labels and dots: ground red, inclined blue, the
-        // other plane its own colour, the rest grey.
+        // Away from the labels and dots: both halves of the ground its
+        // colour, the ramp and the wall theirs, the rest grey.
         let at = |u: u32, v: u32| image.get(u * SCALE, v * SCALE).unwrap();
-        assert_eq!(dominant(at(2, 85)), 0, "{:?}", at(2, 85));
-        assert_eq!(dominant(at(118, 1)), 2, "{:?}", at(118, 1));
+        assert_eq!(tint_role(at(2, 85)), Some(SurfaceRole::Ground));
+        assert_eq!(tint_role(at(118, 47)), Some(SurfaceRole::Ground));
+        assert_eq!(tint_role(at(118, 1)), Some(SurfaceRole::Ramp));
+        assert_eq!(tint_role(at(1, 1)), Some(SurfaceRole::Wall));
         let grey = at(50, 2);
         assert!(grey[0] == grey[1] && grey[1] == grey[2], "{grey:?}");
-        assert_ne!(at(1, 1), grey);
+        assert_eq!(tint_role(grey), None);
+        // The road's boundary pixel, its whole 2 x 2 block; the corridor's
+        // line through its end points and its middle.
+        for (u, v) in [(200, 88), (201, 89)] {
+            assert_eq!(image.get(u, v), Some(ROAD_OUTLINE), "({u}, {v})");
+        }
+        for (u, v) in [(10.0, 80.0), (25.0, 65.0), (40.0, 50.0)] {
+            let (x, y) = (to_output(u).round() as u32, to_output(v).round() as u32);
+            assert_eq!(image.get(x, y), Some(CORRIDOR_LINE), "({u}, {v})");
+        }
         // The dots: kept green, dropped yellow.
         assert_eq!(image.get(80 * SCALE, 5 * SCALE), Some(KEPT_NORMAL));
         assert_eq!(image.get(115 * SCALE, 5 * SCALE), Some(DROPPED_NORMAL));
-        // The labels are written on their planes: white text pixels near
-        // the inclined plane's centre (97, 22), on its blue.
+        // The labels are written on their surfaces: white text pixels near
+        // the ramp's centre (97, 22), on its blue.
         let white = (40..80)
             .flat_map(|v| (160..230).map(move |u| (u, v)))
             .filter(|&(u, v)| image.get(u, v).is_some_and(|p| p.iter().all(|&c| c > 200)))
@@ -459,7 +587,13 @@ mod tests {
             points: &points,
             width: 2,
             height: 2,
-            planes: vec![(&far, Role::Ground)],
+            surfaces: vec![SurfacePixels {
+                pixels: vec![&far],
+                role: Some(SurfaceRole::Ground),
+                label: "ground".into(),
+            }],
+            road_outline: vec![1_000_000],
+            corridor: vec![[(-100.0, -100.0), (-50.0, -50.0)]],
             normals: &[NormalDot {
                 pixel: 99,
                 kept: true,

@@ -1,19 +1,44 @@
-//! Picture basics shared by the overlays: the depth image in grey and the
+//! Picture basics shared by the overlays: the depth image in grey, the
 //! colours of the ground (red) and inclined plane (blue), after the paper's
-//! figures; [`write_png`] is the only I/O.
+//! figures, and the palette of the surface roles; [`write_png`] is the only
+//! I/O.
 
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::Path;
 
 use anyhow::Context;
-use slope_ipc_types::CloudPoint;
+use slope_ipc_types::{CloudPoint, SurfaceRole};
 use slope_sensor::recording::ColorImage;
 
 /// Colour of the ground plane.
 pub const GROUND_TINT: [u8; 3] = [255, 0, 0];
 /// Colour of the inclined plane.
 pub const INCLINED_TINT: [u8; 3] = [0, 0, 255];
+/// Colour of each surface role in the overlay, in [`SurfaceRole::ALL`]'s
+/// order: ground red, step orange, ramp blue, wall brown, elevated teal,
+/// overhang violet (each dark enough for white text on it).
+pub const ROLE_COLOURS: [[u8; 3]; 6] = [
+    [220, 40, 40],
+    [225, 130, 0],
+    [30, 80, 255],
+    [140, 75, 30],
+    [0, 145, 135],
+    [110, 60, 170],
+];
+/// Colour of a segmented plane that no surface holds (the frame had no
+/// ground, so no roles).
+pub const UNCLASSIFIED: [u8; 3] = [150, 150, 150];
+/// Colour of the road's outline.
+pub const ROAD_OUTLINE: [u8; 3] = [255, 0, 255];
+/// Colour of the corridor's edges on the ground.
+pub const CORRIDOR_LINE: [u8; 3] = [0, 255, 255];
+
+/// The overlay colour of `role`.
+pub fn role_colour(role: SurfaceRole) -> [u8; 3] {
+    ROLE_COLOURS[role as usize]
+}
+
 /// Grey of the nearest depth reading (the farthest is [`FAR_GREY`]).
 pub const NEAR_GREY: u8 = 235;
 /// Grey of the farthest depth reading.

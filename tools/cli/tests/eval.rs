@@ -782,8 +782,9 @@ fn the_overlay_colours_the_ground_red_and_the_ramp_blue() {
         let (width, height, pixels) = read_rgb(&path);
         assert_eq!(width, OVERLAY_SCALE * WIDTH);
         assert!(height > OVERLAY_SCALE * HEIGHT + 40, "{height}");
-        // Every pixel coloured after the plane RANSAC gave it; labels and
-        // normal dots lie on their planes. The ground is near and every pixel
+        // Every pixel coloured after the role of the surface RANSAC gave it
+        // to (ground red, ramp blue); labels, normal dots, the road's
+        // outline and the corridor's lines lie on their surfaces. The ground is near and every pixel
         // of it an inlier; the far end of the ramp (beyond 5 m, where the
         // pixels are sparse) is partly dropped as outliers and stays grey,
         // but no pixel of either surface takes the other's colour.
@@ -795,12 +796,20 @@ fn the_overlay_colours_the_ground_red_and_the_ramp_blue() {
             for u in 0..WIDTH {
                 let i = (v * OVERLAY_SCALE * width + u * OVERLAY_SCALE) as usize;
                 let [r, g, b] = pixels[i];
-                // The normal dots (green, yellow, black rims) and the white
-                // label text lie on their planes too.
-                let mark = [[40, 230, 60], [255, 220, 0], [0, 0, 0]].contains(&[r, g, b])
-                    || (r > 200 && g > 200 && b > 200);
-                let red = (i32::from(r) > i32::from(g) + 60 && g == b) || mark;
-                let blue = (i32::from(b) > i32::from(r) + 60 && r == g) || mark;
+                // The normal dots (green, yellow, black rims), the road's
+                // outline (magenta), the corridor (cyan) and the white label
+                // text lie on their surfaces too.
+                let marks = [
+                    [40, 230, 60],
+                    [255, 220, 0],
+                    [0, 0, 0],
+                    [255, 0, 255],
+                    [0, 255, 255],
+                ];
+                let mark = marks.contains(&[r, g, b]) || (r > 200 && g > 200 && b > 200);
+                let (r, g, b) = (i32::from(r), i32::from(g), i32::from(b));
+                let red = (r > g + 60 && g == b) || mark;
+                let blue = (b > r + 60 && b > g + 60) || mark;
                 match ray_cast(u, v, 20.0) {
                     Some((Surface::Ground, _)) => {
                         ground += 1;

@@ -161,6 +161,7 @@ impl Tally<'_> {
                     points: view.points,
                     width,
                     height,
+                    intrinsics: view.intrinsics,
                     estimate: &estimate,
                     inspection: estimator.inspection(),
                     truth_deg,
