@@ -16,6 +16,12 @@ pub struct OutlierConfig {
     /// Neighbours from the pixel grid (ours) or a k-d tree over the whole
     /// cloud (the paper, `literal/knn_outlier.rs`).
     pub neighbourhood: crate::literal::OutlierNeighbourhood,
+    /// `[near, far]`, metres along the optical axis: points outside are no
+    /// reading. Unset: the sensor's range
+    /// ([`crate::sensor_noise::NoiseModel::depth_range_m`] of
+    /// `selection.noise_model`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub depth_range_m: Option<[f64; 2]>,
 }
 
 impl Default for OutlierConfig {
@@ -25,6 +31,7 @@ impl Default for OutlierConfig {
             neighbours: 20,
             std_ratio: 2.0,
             neighbourhood: crate::literal::OutlierNeighbourhood::Grid,
+            depth_range_m: None,
         }
     }
 }
@@ -39,6 +46,15 @@ impl OutlierConfig {
             self.neighbours,
             "must be at most 48 (the 7x7 pixel window)",
         )?;
-        non_negative("std_ratio", self.std_ratio)
+        non_negative("std_ratio", self.std_ratio)?;
+        if let Some([near, far]) = self.depth_range_m {
+            check(
+                near.is_finite() && far.is_finite() && near >= 0.0 && far > near,
+                "depth_range_m",
+                format!("[{near}, {far}]"),
+                "must be [near, far] in metres with 0 <= near < far",
+            )?;
+        }
+        Ok(())
     }
 }

@@ -21,6 +21,7 @@ pub mod overlay;
 pub mod plot;
 pub mod ply;
 pub mod record;
+pub mod rejected_clouds;
 pub mod render;
 pub mod replay;
 pub mod service_manager;
