@@ -470,8 +470,13 @@ fn the_recorder_loses_no_cloud_at_30_hz_under_load() {
         .ok()
         .and_then(|s| s.parse().ok())
         .unwrap_or(300.0);
+    // `SLOPE_RECORD_SOAK_FORMAT=recording`: a recording directory instead.
+    let name = match std::env::var("SLOPE_RECORD_SOAK_FORMAT").as_deref() {
+        Ok("recording") => "soak",
+        _ => "soak.mcap",
+    };
     let dir = tempfile::tempdir().expect("temp dir");
-    let out = dir.path().join("soak.mcap");
+    let out = dir.path().join(name);
     let prefix = unique_prefix("record-soak");
     let duration = seconds.to_string();
     let _estimator = start_estimator(&prefix, &["--health-interval-s", "1"]);
@@ -518,6 +523,7 @@ fn the_recorder_loses_no_cloud_at_30_hz_under_load() {
     };
     let (written, missed) = (field("written"), field("missed"));
     let size_mb = std::fs::metadata(&out).map_or(0, |m| m.len()) / 1_000_000;
+    println!("{finished}");
     println!(
         "recorded {written} clouds in {seconds:.0} s ({elapsed:.0} s with start and finish), \
          missed {missed}, {size_mb} MB"
