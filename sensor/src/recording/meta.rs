@@ -422,7 +422,7 @@ mod tests {
     fn formatted_meta_parses_back_to_the_same_bits() {
         let path = Path::new("recording.toml");
         let mut meta = sample();
-        for tricky in [1e-300, 5e-324, 1023.999_999_999_9, 1.0 / 3.0] {
+        for tricky in [1e-300, 5e-324, 1023.9999999999, 1.0 / 3.0] {
             meta.depth.cx = tricky;
             let text = format_meta(&meta).unwrap();
             let back = parse_meta(&text, path).unwrap();
@@ -504,7 +504,8 @@ mod tests {
     /// exit 0, no word why) are refused naming the key and the range.
     #[test]
     fn absurd_finite_depth_values_are_refused_by_key() {
-        let cases: [(fn(&mut DepthInfo), &str); 5] = [
+        type Spoil = fn(&mut DepthInfo);
+        let cases: [(Spoil, &str); 5] = [
             (|d| d.unit_m = 1e300, "depth.unit_m"),
             (|d| d.unit_m = 1e-300, "depth.unit_m"),
             (|d| d.cx = 1e300, "depth.cx"),

@@ -33,7 +33,7 @@ pub(super) struct QueuedFrame {
 
 enum Job {
     Frame(Box<QueuedFrame>),
-    Estimate(SlopeEstimate),
+    Estimate(Box<SlopeEstimate>),
 }
 
 /// What the writer thread did: the sink, the frames it wrote and its error.
@@ -101,7 +101,7 @@ impl SinkThread {
 
     /// Queues an estimate (MCAP; ignored for a recording directory).
     pub(super) fn write_estimate(&self, estimate: SlopeEstimate) -> bool {
-        self.jobs.send(Job::Estimate(estimate)).is_ok()
+        self.jobs.send(Job::Estimate(Box::new(estimate))).is_ok()
     }
 
     /// Waits until everything queued is written (or the writer failed).
