@@ -18,14 +18,24 @@ pub const NEAR_BORDER: u32 = 1 << 4;
 /// The paper method and a TLS fit of the same planes disagree.
 pub const METHODS_DISAGREE: u32 = 1 << 5;
 
+/// The road was a close call: another ramp or wall in the robot's corridor
+/// lies within a short distance of the one measured.
+pub const CLOSE_CHOICE: u32 = 1 << 6;
+
+/// The road's foot is hidden behind something nearer (a box before a
+/// ramp): it may stand on the ground out of sight, or not.
+pub const FOOT_HIDDEN: u32 = 1 << 7;
+
 /// Every reason with its name, in bit order.
-pub const ALL: [(u32, &str); 6] = [
+pub const ALL: [(u32, &str); 8] = [
     (FEW_POINTS, "few_points"),
     (ROUGH_PLANE, "rough_plane"),
     (SMALL_AREA, "small_area"),
     (GROUND_FROM_MOUNT, "ground_from_mount"),
     (NEAR_BORDER, "near_border"),
     (METHODS_DISAGREE, "methods_disagree"),
+    (CLOSE_CHOICE, "close_choice"),
+    (FOOT_HIDDEN, "foot_hidden"),
 ];
 
 /// The names of the reasons set in `bits`, in bit order; a bit this build
@@ -52,7 +62,7 @@ mod tests {
             assert_eq!(acc & bit, 0);
             acc | bit
         });
-        assert_eq!(all, 0b11_1111);
+        assert_eq!(all, 0b1111_1111);
         let names: Vec<_> = names(FEW_POINTS | GROUND_FROM_MOUNT).collect();
         assert_eq!(names, ["few_points", "ground_from_mount"]);
         assert_eq!(super::names(0).count(), 0);

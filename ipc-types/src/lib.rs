@@ -12,6 +12,8 @@
 //! | `slope/cloud` | event | "a new cloud was sent" | - |
 //! | `slope/estimate` | publish-subscribe | [`SlopeEstimate`] (`slope.SlopeEstimate.v2`) | - |
 //! | `slope/estimate` | event | "a new estimate was sent" | - |
+//! | `slope/surfaces` | publish-subscribe | [`Surfaces`] (`slope.Surfaces.v1`): every surface of the frame with its role, and the road | - |
+//! | `slope/surfaces` | event | "new surfaces were sent" | - |
 //! | `slope/health` | publish-subscribe | [`Health`] (`slope.Health.v1`), about once a second from each daemon | - |
 //! | `slope/health` | event | "a new health report was sent" | - |
 
@@ -20,6 +22,7 @@ pub mod confidence;
 mod estimate;
 mod health;
 mod services;
+mod surfaces;
 mod text;
 
 pub use cloud::{CloudHeader, CloudPoint, CloudSource, Intrinsics, Mount, SENSOR_NAME_LEN};
@@ -29,6 +32,10 @@ pub use health::{
 };
 pub use services::{
     ServiceNames, DEFAULT_MAX_CLOUD_POINTS, DEFAULT_SERVICE_PREFIX, SERVICE_PREFIX_ENV,
+};
+pub use surfaces::{
+    surface_flags, SurfaceDescription, SurfaceRole, SurfaceSupport, Surfaces, MAX_SURFACES,
+    NO_SURFACE,
 };
 
 /// Nanoseconds since the Unix epoch (CLOCK_REALTIME), the clock every
@@ -77,6 +84,24 @@ pub mod layout {
             confidence, confidence_reasons, ground_seen_to_m, ground_rms_m, inclined_rms_m,
             ground_area_m2, inclined_area_m2, tracked_slope_deg, tracked_std_deg,
             tracked_frames, tracked_accepted,
+        )
+    }
+
+    /// The fields of [`crate::Surfaces`], in declaration order.
+    pub fn surfaces() -> Vec<FieldLayout> {
+        fields!(crate::Surfaces:
+            frame_index, capture_stamp_ns, publish_stamp_ns, source_stamp_ns, status, count,
+            road, ground_from_mount, up, forward, ground_plane, corridor_half_width_m,
+            look_ahead_m, surfaces,
+        )
+    }
+
+    /// The fields of [`crate::SurfaceDescription`], in declaration order.
+    pub fn surface_description() -> Vec<FieldLayout> {
+        fields!(crate::SurfaceDescription:
+            role, support, supported_by, inliers, flags, segments, slope_deg, heading_deg,
+            distance_m, far_m, left_m, right_m, lowest_m, highest_m, area_m2, rms_m,
+            noise_ratio, plane, outline,
         )
     }
 

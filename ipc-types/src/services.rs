@@ -19,6 +19,9 @@ pub const CLOUD_SUFFIX: &str = "cloud";
 /// Suffix of the estimate service (publish-subscribe and event).
 pub const ESTIMATE_SUFFIX: &str = "estimate";
 
+/// Suffix of the surfaces service (publish-subscribe and event).
+pub const SURFACES_SUFFIX: &str = "surfaces";
+
 /// Suffix of the health service (publish-subscribe and event).
 pub const HEALTH_SUFFIX: &str = "health";
 
@@ -59,6 +62,12 @@ impl ServiceNames {
         format!("{}/{}", self.prefix, ESTIMATE_SUFFIX)
     }
 
+    /// `<prefix>/surfaces`: every surface of a frame with its role (and
+    /// their "new surfaces" event).
+    pub fn surfaces(&self) -> String {
+        format!("{}/{}", self.prefix, SURFACES_SUFFIX)
+    }
+
     /// `<prefix>/health`: the daemons' health reports (and their event).
     pub fn health(&self) -> String {
         format!("{}/{}", self.prefix, HEALTH_SUFFIX)
@@ -81,6 +90,7 @@ mod tests {
         assert_eq!(names.cloud(), "test-42/cloud");
         assert_eq!(names.estimate(), "test-42/estimate");
         assert_eq!(names.health(), "test-42/health");
+        assert_eq!(names.surfaces(), "test-42/surfaces");
         assert_eq!(ServiceNames::default().cloud(), "slope/cloud");
     }
 }

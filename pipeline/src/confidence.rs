@@ -12,6 +12,8 @@
 //! | `ground_from_mount` | no ground plane was seen | 0.7 |
 //! | `near_border` | over 30 % of a plane's pixels are within 8 px of the border | `1 - (share - 0.3)`, at least 0.5 |
 //! | `methods_disagree` | paper method and TLS differ by more than 1 degree | `max(1 / difference, 0.2)` |
+//! | `close_choice` | another ramp or wall at a different slope lies in the corridor within `road.close_choice_m` behind the road | 0.7 |
+//! | `foot_hidden` | the road's foot is hidden behind something nearer | 0.7 |
 //!
 //! A planner may gate on the value (e.g. `>= 0.5`) and log the reasons.
 
@@ -112,6 +114,23 @@ pub fn confidence(
 }
 
 /// 1 up to `from`, falling linearly to 0.5 at `half_at`, 0.5 beyond.
+/// The factor of a road chosen in a close call (`close_choice`).
+pub const CLOSE_CHOICE_FACTOR: f64 = 0.7;
+/// The factor of a road whose foot is hidden (`foot_hidden`).
+pub const FOOT_HIDDEN_FACTOR: f64 = 0.7;
+
+/// `c` lowered for how the road was chosen (`selection/road.rs`): another
+/// candidate at a different slope close behind it, or its foot hidden.
+pub fn with_road_choice(mut c: Confidence, close_choice: bool, foot_hidden: bool) -> Confidence {
+    if close_choice {
+        c.lower(reason::CLOSE_CHOICE, CLOSE_CHOICE_FACTOR);
+    }
+    if foot_hidden {
+        c.lower(reason::FOOT_HIDDEN, FOOT_HIDDEN_FACTOR);
+    }
+    c
+}
+
 fn falling(value: f64, from: f64, half_at: f64) -> f64 {
     let excess = (value - from).max(0.0);
     1.0 - 0.5 * (excess / (half_at - from)).min(1.0)

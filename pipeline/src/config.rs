@@ -29,6 +29,9 @@
 //! [cumulative]              # paper 3.2
 //! draws = 1000              # paper: 100
 //!
+//! [road]                    # roles of the surfaces, the road ahead
+//! corridor_half_width_m = 0.4
+//!
 //! [tracking]                # the slope followed over frames
 //! window = 15
 //! ```
@@ -47,7 +50,7 @@ pub use crate::cumulative_angle::CumulativeConfig;
 pub use crate::normals::NormalsConfig;
 pub use crate::pass_through::PassThroughConfig;
 pub use crate::ransac_planes::RansacConfig;
-pub use crate::selection::SelectionConfig;
+pub use crate::selection::{RoadConfig, SelectionConfig};
 pub use crate::statistical_outlier::OutlierConfig;
 pub use crate::tracking::TrackingConfig;
 
@@ -88,6 +91,8 @@ pub struct EstimatorConfig {
     pub kmeans: KmeansConfig,
     pub cumulative: CumulativeConfig,
     pub selection: SelectionConfig,
+    /// The roles of the surfaces and the choice of the road ahead.
+    pub road: RoadConfig,
     pub tracking: TrackingConfig,
 }
 
@@ -103,6 +108,7 @@ impl Default for EstimatorConfig {
             kmeans: KmeansConfig::default(),
             cumulative: CumulativeConfig::default(),
             selection: SelectionConfig::default(),
+            road: RoadConfig::default(),
             tracking: TrackingConfig::default(),
         }
     }
@@ -164,7 +170,7 @@ impl EstimatorConfig {
 
     /// Checks every value's range; the error names the first bad key.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        let sections: [(&str, Result<(), InvalidValue>); 8] = [
+        let sections: [(&str, Result<(), InvalidValue>); 10] = [
             ("outlier", self.outlier.validate()),
             ("ransac", self.ransac.validate()),
             ("pass_through", self.pass_through.validate()),
@@ -172,12 +178,26 @@ impl EstimatorConfig {
             ("kmeans", self.kmeans.validate()),
             ("cumulative", self.cumulative.validate()),
             ("selection", self.selection.validate()),
+            ("road", self.road.validate()),
+            ("road", self.road_against_selection()),
             ("tracking", self.tracking.validate()),
         ];
         for (section, result) in sections {
             result.map_err(|e| ConfigError::Invalid(e.in_section(section)))?;
         }
         Ok(())
+    }
+}
+
+impl EstimatorConfig {
+    /// A ramp is steeper than "parallel" to the ground.
+    fn road_against_selection(&self) -> Result<(), InvalidValue> {
+        crate::validate::check(
+            self.road.max_ramp_deg > self.selection.parallel_tolerance_deg,
+            "max_ramp_deg",
+            self.road.max_ramp_deg,
+            "must be larger than selection.parallel_tolerance_deg",
+        )
     }
 }
 

@@ -4,7 +4,8 @@
 
 use slope_ipc_types::{EstimateStatus, SlopeMethod};
 
-use crate::tracking::TrackedSlope;
+use crate::selection::RoadScene;
+use crate::tracking::{RoadPlace, TrackedSlope};
 
 /// The result for one frame.
 #[derive(Debug, Clone, PartialEq)]
@@ -36,6 +37,9 @@ pub struct Estimate {
     pub confidence_reasons: u32,
     /// The slope followed over frames (`Estimator::estimate_frame`).
     pub tracked: Option<TrackedSlope>,
+    /// Every surface in view with its role, and which is the road (`None`
+    /// without a ground, or when the frame failed before the selection).
+    pub scene: Option<RoadScene>,
     pub timings: StageTimings,
 }
 
@@ -57,8 +61,21 @@ impl Estimate {
             confidence: 0.0,
             confidence_reasons: 0,
             tracked: None,
+            scene: None,
             timings: StageTimings::default(),
         }
+    }
+}
+
+impl Estimate {
+    /// Where the road is, for tracking: its nearest point in the corridor
+    /// and its heading; `None` without a road.
+    pub fn road_place(&self) -> Option<RoadPlace> {
+        let road = self.scene.as_ref()?.road_surface()?;
+        Some(RoadPlace {
+            distance_m: road.corridor_distance_m,
+            heading_deg: road.heading_deg,
+        })
     }
 }
 

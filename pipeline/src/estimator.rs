@@ -21,6 +21,7 @@ use slope_ipc_types::{EstimateStatus, SlopeMethod};
 
 use crate::baseline::baseline_fit;
 use crate::cloud::{is_measured, CloudView};
+use crate::confidence::{with_road_choice, Confidence};
 use crate::config::{EstimatorConfig, NormalsConfig, PassThroughConfig};
 use crate::cosine_kmeans::CosineKmeans;
 use crate::cumulative_angle::{cumulative_angle, rotation_axis};
@@ -35,11 +36,12 @@ use crate::pass_through::PassThrough;
 use crate::plane_fit::Plane;
 use crate::ransac_planes::{PlaneSegmenter, SegmentedPlane, Threshold};
 use crate::selection::{
-    chosen_segments, forward_direction, select_ground, select_inclined, Ground, PlaneSegment,
-    PlaneSummary, Selection,
+    chosen_segments, select_ground, survey_surfaces, Ground, PlaneSegment, PlaneSummary, RoadScene,
+    Selection, SurveyInput,
 };
 use crate::statistical_outlier::StatisticalOutlierFilter;
 use crate::tracking::{FrameSlope, SlopeTracker, StreamPosition};
+use slope_ipc_types::SurfaceSupport;
 
 pub use crate::estimate::{Estimate, PlaneEstimate, StageTimings};
 pub use crate::inspection::{InspectedNormal, Inspection};
@@ -111,6 +113,8 @@ pub struct Estimator {
     paper: PaperStages,
     tracker: SlopeTracker,
     roles: Roles,
+    /// The last frame's surfaces and road (moved into its estimate).
+    scene: Option<RoadScene>,
 }
 
 impl Estimator {
@@ -127,6 +131,7 @@ impl Estimator {
             paper: PaperStages::default(),
             tracker: SlopeTracker::new(),
             roles: Roles::default(),
+            scene: None,
         }
     }
 
@@ -182,6 +187,7 @@ impl Estimator {
             slope_deg: estimate.slope_deg,
             error_deg: estimate.slope_std_deg / samples.sqrt(),
             confidence: estimate.confidence,
+            road: estimate.road_place(),
         };
         let position = StreamPosition::of(cloud, frame.index, frame.stamp_ns);
         let tracked = self
@@ -223,7 +229,11 @@ impl Estimator {
         let selection = match selection {
             None => return Err(EstimateStatus::NoGround),
             Some(Ok(selection)) => selection,
-            Some(Err(ground)) => return Ok(self.ground_only(cloud, ground)),
+            Some(Err(ground)) => {
+                let mut estimate = self.ground_only(cloud, ground);
+                estimate.scene = self.scene.take();
+                return Ok(estimate);
+            }
         };
         self.keep_roles(&selection);
         let (inclined, ground) = chosen_segments(
@@ -259,12 +269,37 @@ impl Estimator {
             estimate.ground_seen_to_m =
                 ground_seen_to_m(cloud.points, ground.inliers, &selection.forward);
         }
+        self.lower_for_road_choice(&mut estimate);
+        estimate.scene = self.scene.take();
         clock.lap("confidence");
         Ok(estimate)
     }
 
-    /// Empties the roles and normals of the last frame ([`Self::inspection`]).
+    /// The estimate's confidence lowered for how its road was chosen (a
+    /// close call, a hidden foot: `selection/road.rs`).
+    fn lower_for_road_choice(&self, estimate: &mut Estimate) {
+        let Some(scene) = &self.scene else {
+            return;
+        };
+        let (Some(road), Some(surface)) = (scene.road, scene.road_surface()) else {
+            return;
+        };
+        let hidden = scene.heights_known && surface.support == SurfaceSupport::Hidden;
+        let c = with_road_choice(
+            Confidence {
+                value: estimate.confidence,
+                reasons: estimate.confidence_reasons,
+            },
+            road.close_choice,
+            hidden,
+        );
+        (estimate.confidence, estimate.confidence_reasons) = (c.value, c.reasons);
+    }
+
+    /// Empties the roles, normals and surfaces of the last frame
+    /// ([`Self::inspection`]).
     fn forget_last_frame(&mut self) {
+        self.scene = None;
         self.roles.ground.clear();
         self.roles.inclined = None;
         if let Some(seen) = &mut self.paper.inspected {
@@ -286,20 +321,36 @@ impl Estimator {
         }
     }
 
-    /// The ground and the inclined plane among the segmented planes:
-    /// `None` without a ground, the ground alone (the error) without an
-    /// inclined plane.
+    /// The ground and the road among the segmented planes (every surface
+    /// into `self.scene`): `None` without a ground, the ground alone (the
+    /// error) without a road.
     fn select(&mut self, cloud: &CloudView<'_>) -> Option<Result<Selection, Ground>> {
         self.summarize_planes(cloud);
         let mount_up = cloud.mount.up_vector().map(Vector3::from);
+        let mount_height_m = Some(cloud.mount.height_m);
         let config = &self.config.selection;
-        select_ground(
-            &self.summaries,
+        let ground = select_ground(&self.summaries, mount_up, mount_height_m, config)?;
+        let input = SurveyInput {
+            cloud,
+            planes: segmented(&self.segmenter, &self.every_point, &self.config),
+            summaries: &self.summaries,
             mount_up,
-            Some(cloud.mount.height_m),
-            config,
-        )
-        .map(|ground| select_inclined(&self.summaries, ground, mount_up, config))
+            mount_height_m,
+        };
+        self.scene = survey_surfaces(&input, &ground, config, &self.config.road);
+        let road = self.scene.as_ref().and_then(|scene| {
+            let surface = scene.road_surface()?;
+            Some((surface.plane_index, scene.frame))
+        });
+        Some(match road {
+            Some((inclined, frame)) => Ok(Selection {
+                ground,
+                inclined,
+                up: frame.up,
+                forward: frame.forward,
+            }),
+            None => Err(ground),
+        })
     }
 
     /// Keeps the selection's roles for [`Self::inspection`].
@@ -368,9 +419,11 @@ impl Estimator {
                 &mut self.ground_pixels,
             );
             estimate.ground = flat_ground_estimate(&segment);
-            // The lowest ground plane's normal is up, as for the selection.
-            let forward = forward_direction(&self.summaries[members[0]].plane.normal);
-            estimate.ground_seen_to_m = ground_seen_to_m(cloud.points, segment.inliers, &forward);
+            // The ground frame's forward, as for the selection.
+            if let Some(scene) = &self.scene {
+                estimate.ground_seen_to_m =
+                    ground_seen_to_m(cloud.points, segment.inliers, &scene.frame.forward);
+            }
         }
         estimate
     }

@@ -68,6 +68,7 @@ pub(crate) fn finish(
         confidence: confidence.value,
         confidence_reasons: confidence.reasons,
         tracked: None,
+        scene: None,
         timings: StageTimings::default(),
     })
 }

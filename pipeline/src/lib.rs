@@ -15,13 +15,14 @@
 //! | `cumulative_angle.rs` | 6. cumulative averaging of the angle |
 //! | `plane_fit.rs` | TLS and least-squares plane fits (baselines) |
 //! | `baseline.rs` | the least-squares and TLS baselines: each chosen plane's pixels fitted by one plane |
-//! | `selection/` | plane quality; which plane is the ground, which the inclined plane; sign, distance; the chosen planes' pixels (the ground's segments joined) |
+//! | `selection/` | plane quality; the ground; every surface with its role (ground, step, ramp, wall, elevated, overhang); the road ahead in the robot's corridor; sign, distance; the chosen planes' pixels (the ground's segments joined) |
 //! | `sensor_noise.rs` | the depth sensor's noise, the yardstick of flatness |
 //! | `finish.rs` | the estimate from a method's fit: sign, distance, planes, confidence (the paper method checked against TLS) |
 //! | `confidence.rs` | how far to trust an estimate, and why |
 //! | `ground_reach.rs` | how far ahead the ground was seen (where a floor ends before a drop-off) |
 //! | `tracking.rs` | the slope of the plane ahead followed over frames |
 //! | `message.rs` | an estimate written into the `SlopeEstimate` message |
+//! | `surfaces_message.rs` | an estimate's surfaces written into the `Surfaces` message |
 //! | `estimator.rs` | orchestration and timings |
 //! | `estimate.rs` | what the estimator returns: the estimate, its planes and timings |
 //! | `inspection.rs` | what the estimator saw in its last frame (planes, roles, sampled normals) |
@@ -53,13 +54,14 @@ pub mod ransac_planes;
 pub mod selection;
 pub mod sensor_noise;
 pub mod statistical_outlier;
+pub mod surfaces_message;
 pub mod tracking;
 pub mod validate;
 
 pub use cloud::CloudView;
 pub use config::{
     parse_method, ConfigError, CumulativeConfig, EstimatorConfig, KmeansConfig, NormalsConfig,
-    OutlierConfig, PassThroughConfig, RansacConfig, SelectionConfig, TrackingConfig,
+    OutlierConfig, PassThroughConfig, RansacConfig, RoadConfig, SelectionConfig, TrackingConfig,
 };
 pub use estimator::{
     Estimate, Estimator, FrameInfo, InspectedNormal, Inspection, PlaneEstimate, StageTimings,

@@ -17,6 +17,13 @@
 //!   approaches).
 //! - **Outliers are rejected, not averaged in.** A frame outside the gate is
 //!   not added to the window.
+//! - **Reset when the road changes.** A frame whose road (the surface the
+//!   slope is measured on, `selection/road.rs`) lies more than
+//!   `road_change_m` nearer or farther than the last accepted frame's, or
+//!   turns by more than `road_change_heading_deg`, is another surface (the
+//!   wall behind a ramp, a ramp beside the first): the track restarts from
+//!   it at once, even at the same slope. A glitch at the same place is no
+//!   new road and is gated as any frame.
 //! - **Reset when the plane ahead changes.** When `reset_after` rejected
 //!   frames in a row agree with each other (all within the gate of their own
 //!   median), the track restarts from them: a new ramp, a wall after a
@@ -83,6 +90,12 @@ pub struct TrackingConfig {
     /// so that frames one second apart (`slope-replay --rate 1`) keep it
     /// whatever their jitter.
     pub max_gap_s: f64,
+    /// The road is another surface when its nearest point in the corridor
+    /// moved by more than this since the last accepted frame, metres (a
+    /// robot covers a few centimetres a frame).
+    pub road_change_m: f64,
+    /// ...or its heading turned by more than this, degrees.
+    pub road_change_heading_deg: f64,
 }
 
 impl Default for TrackingConfig {
@@ -95,6 +108,8 @@ impl Default for TrackingConfig {
             reset_after: 5,
             max_missed: 30,
             max_gap_s: 1.5,
+            road_change_m: 0.5,
+            road_change_heading_deg: 20.0,
         }
     }
 }
@@ -108,7 +123,9 @@ impl TrackingConfig {
         fraction("min_confidence", self.min_confidence)?;
         non_negative("gate_deg", self.gate_deg)?;
         non_negative("gate_sigmas", self.gate_sigmas)?;
-        positive("max_gap_s", self.max_gap_s)
+        positive("max_gap_s", self.max_gap_s)?;
+        positive("road_change_m", self.road_change_m)?;
+        crate::validate::angle("road_change_heading_deg", self.road_change_heading_deg)
     }
 }
 
@@ -180,6 +197,27 @@ pub struct FrameSlope {
     /// The frame's own error of `slope_deg`, degrees.
     pub error_deg: f64,
     pub confidence: f64,
+    /// Where the road is (`None`: unknown, never a change of road).
+    pub road: Option<RoadPlace>,
+}
+
+/// Where a frame's road is: what tells one surface from another as the
+/// robot drives.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RoadPlace {
+    /// Forward distance to its nearest point in the corridor, metres.
+    pub distance_m: f64,
+    /// Heading of its uphill direction, degrees.
+    pub heading_deg: f64,
+}
+
+impl RoadPlace {
+    /// True when `next` is another surface than `self`.
+    fn is_other(&self, next: &RoadPlace, config: &TrackingConfig) -> bool {
+        let turn = (next.heading_deg - self.heading_deg + 540.0).rem_euclid(360.0) - 180.0;
+        (next.distance_m - self.distance_m).abs() > config.road_change_m
+            || turn.abs() > config.road_change_heading_deg
+    }
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -199,6 +237,8 @@ pub struct SlopeTracker {
     scratch: Vec<f64>,
     /// The last frame seen.
     last: Option<StreamPosition>,
+    /// The road of the last accepted frame.
+    road: Option<RoadPlace>,
 }
 
 impl SlopeTracker {
@@ -239,6 +279,11 @@ impl SlopeTracker {
             return self.tracked(false);
         }
         self.missed = 0;
+        if let (Some(last), Some(next)) = (self.road, frame.road) {
+            if last.is_other(&next, config) {
+                self.clear();
+            }
+        }
         let sample = Sample {
             slope_deg: frame.slope_deg,
             error_deg: frame.error_deg,
@@ -251,6 +296,7 @@ impl SlopeTracker {
         };
         if accepted {
             self.rejected.clear();
+            self.road = frame.road;
             self.push(sample, config);
         } else {
             self.rejected.push(sample);
@@ -260,6 +306,7 @@ impl SlopeTracker {
                 for s in restart {
                     self.push(s, config);
                 }
+                self.road = frame.road;
                 return self.tracked(true);
             }
         }
@@ -275,6 +322,7 @@ impl SlopeTracker {
     }
 
     fn clear(&mut self) {
+        self.road = None;
         self.window.clear();
         self.rejected.clear();
         self.frames = 0;
@@ -362,6 +410,7 @@ mod tests {
             slope_deg,
             error_deg: 0.05,
             confidence: 1.0,
+            road: None,
         }
     }
 
@@ -400,6 +449,7 @@ mod tests {
             slope_deg: f64::NAN,
             error_deg: f64::NAN,
             confidence: 0.0,
+            road: None,
         };
         let low = FrameSlope {
             confidence: 0.1,

@@ -20,7 +20,7 @@ use iceoryx2::sample::Sample;
 use iceoryx2::service::port_factory::event::PortFactory as EventFactory;
 use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFactory;
 use slope_ipc_types::{
-    now_ns, CloudHeader, CloudPoint, Health, ServiceNames, SlopeEstimate, SENSOR_NAME_LEN,
+    now_ns, CloudHeader, CloudPoint, Health, ServiceNames, SlopeEstimate, Surfaces, SENSOR_NAME_LEN,
 };
 
 use crate::projection::Projector;
@@ -41,6 +41,11 @@ pub const CLOUD_RECORDER_BUFFER: usize = 4;
 pub const ESTIMATE_MAX_SUBSCRIBERS: usize = 16;
 /// Estimates a subscriber may hold unread (about 2 s at 30 Hz).
 pub const ESTIMATE_SUBSCRIBER_BUFFER: usize = 64;
+/// Most processes that may subscribe to the surfaces at once.
+pub const SURFACES_MAX_SUBSCRIBERS: usize = 16;
+/// Surfaces messages a subscriber may hold unread (about 0.5 s at 30 Hz;
+/// each is 3.2 kB).
+pub const SURFACES_SUBSCRIBER_BUFFER: usize = 16;
 /// Daemons that may report on one health topic at once (estimator,
 /// capture or replay, and a spare for a second recorder or a test).
 pub const HEALTH_MAX_PUBLISHERS: usize = 4;
@@ -124,6 +129,7 @@ fn service_name(name: &str) -> Result<ServiceName, IpcError> {
 type CloudService = PubSubFactory<ipc::Service, [CloudPoint], CloudHeader>;
 type EstimateService = PubSubFactory<ipc::Service, SlopeEstimate, ()>;
 type HealthService = PubSubFactory<ipc::Service, Health, ()>;
+type SurfacesService = PubSubFactory<ipc::Service, Surfaces, ()>;
 
 /// Why iceoryx2 may have failed to create a node, when it is the usual
 /// reason: its root path (`/tmp/iceoryx2` by default) belongs to another
@@ -179,6 +185,19 @@ fn estimate_service(node: &Node<ipc::Service>, name: &str) -> Result<EstimateSer
         .enable_safe_overflow(true)
         .open_or_create()
         .map_err(|e| IpcError::new("open or create the estimate service", name, e))
+}
+
+fn surfaces_service(node: &Node<ipc::Service>, name: &str) -> Result<SurfacesService, IpcError> {
+    node.service_builder(&service_name(name)?)
+        .publish_subscribe::<Surfaces>()
+        .max_publishers(1)
+        .max_subscribers(SURFACES_MAX_SUBSCRIBERS)
+        .subscriber_max_buffer_size(SURFACES_SUBSCRIBER_BUFFER)
+        .subscriber_max_borrowed_samples(2)
+        .history_size(0)
+        .enable_safe_overflow(true)
+        .open_or_create()
+        .map_err(|e| IpcError::new("open or create the surfaces service", name, e))
 }
 
 fn health_service(node: &Node<ipc::Service>, name: &str) -> Result<HealthService, IpcError> {
@@ -597,6 +616,86 @@ impl EstimateSubscriber {
             .receive()
             .map(|s| s.map(|sample| *sample.payload()))
             .map_err(|e| IpcError::new("receive an estimate", &self.topic.name, e))
+    }
+}
+
+/// Publishes every surface of each frame on `<prefix>/surfaces`.
+pub struct SurfacesPublisher {
+    publisher: Publisher<ipc::Service, Surfaces, ()>,
+    notifier: Notifier<ipc::Service>,
+    name: String,
+}
+
+impl SurfacesPublisher {
+    pub fn create(node: &Node<ipc::Service>, names: &ServiceNames) -> Result<Self, IpcError> {
+        let name = names.surfaces();
+        let publisher = surfaces_service(node, &name)?
+            .publisher_builder()
+            .create()
+            .map_err(|e| {
+                IpcError::new(
+                    "create a publisher (is another estimator already running?)",
+                    &name,
+                    e,
+                )
+            })?;
+        let notifier = create_notifier(node, &name)?;
+        Ok(Self {
+            publisher,
+            notifier,
+            name,
+        })
+    }
+
+    /// Fills a loaned sample with `fill` (starting from
+    /// `Surfaces::default()`), stamps `publish_stamp_ns` and sends it.
+    pub fn publish(&self, fill: impl FnOnce(&mut Surfaces)) -> Result<(), IpcError> {
+        let sample = self
+            .publisher
+            .loan_uninit()
+            .map_err(|e| IpcError::new("loan a sample", &self.name, e))?;
+        let mut sample = sample.write_payload(Surfaces::default());
+        let message = sample.payload_mut();
+        fill(message);
+        message.publish_stamp_ns = now_ns();
+        sample
+            .send()
+            .map_err(|e| IpcError::new("send the surfaces", &self.name, e))?;
+        self.notifier
+            .notify()
+            .map_err(|e| IpcError::new("notify subscribers", &self.name, e))?;
+        Ok(())
+    }
+}
+
+/// Subscribes to the surfaces and wakes on their event.
+pub struct SurfacesSubscriber {
+    topic: TopicSubscriber<Surfaces, ()>,
+}
+
+impl SurfacesSubscriber {
+    pub fn create(node: &Node<ipc::Service>, names: &ServiceNames) -> Result<Self, IpcError> {
+        Ok(Self {
+            topic: TopicSubscriber::create(
+                node,
+                names.surfaces(),
+                SURFACES_MAX_SUBSCRIBERS,
+                None,
+                surfaces_service,
+            )?,
+        })
+    }
+
+    pub fn listener(&self) -> &TopicListener {
+        &self.topic.listener
+    }
+
+    pub fn receive(&self) -> Result<Option<Surfaces>, IpcError> {
+        self.topic
+            .subscriber
+            .receive()
+            .map(|s| s.map(|sample| *sample.payload()))
+            .map_err(|e| IpcError::new("receive the surfaces", &self.topic.name, e))
     }
 }
 

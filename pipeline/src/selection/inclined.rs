@@ -27,7 +27,9 @@ use super::{is_flat_at_noise_level, PlaneSummary};
 use crate::cloud::angle_between_deg;
 use crate::plane_fit::Plane;
 
-/// Chooses the inclined plane among `planes` not in `ground`.
+/// Chooses the inclined plane among `planes` not in `ground`, on the
+/// planes' summaries alone (no pixels: the road's rules, `road.rs`, need
+/// them): the nearest candidate by its centroid's forward distance.
 pub fn choose_inclined(
     planes: &[PlaneSummary],
     ground: &[usize],
@@ -35,23 +37,9 @@ pub fn choose_inclined(
     forward: &Vector3<f64>,
     config: &SelectionConfig,
 ) -> Option<usize> {
-    let cos_heading = config.max_heading_deg.to_radians().cos();
     let candidates: Vec<usize> = (0..planes.len())
         .filter(|k| !ground.contains(k))
-        .filter(|&k| {
-            let p = &planes[k];
-            let n = p.plane.normal;
-            let angle = angle_between_deg(&n, up);
-            let horizontal = n - up * n.dot(up);
-            let h = horizontal.norm();
-            is_flat_at_noise_level(p, config)
-                && p.quality.area_m2 >= config.inclined_min_area_m2
-                && angle > config.parallel_tolerance_deg
-                && angle <= config.max_slope_deg
-                && h > 1e-9
-                && horizontal.dot(forward).abs() >= cos_heading * h
-                && p.centroid.dot(forward) > 0.0
-        })
+        .filter(|&k| is_inclined_candidate(&planes[k], up, forward, config))
         .collect();
     let support = candidates
         .iter()
@@ -69,6 +57,29 @@ pub fn choose_inclined(
                 .total_cmp(&planes[b].centroid.dot(forward))
                 .then(a.cmp(&b))
         })
+}
+
+/// True when the plane passes the inclined plane's tests (module
+/// documentation): flat at the noise level, large enough, inclined but not
+/// facing down, facing along forward, its centroid ahead.
+pub fn is_inclined_candidate(
+    p: &PlaneSummary,
+    up: &Vector3<f64>,
+    forward: &Vector3<f64>,
+    config: &SelectionConfig,
+) -> bool {
+    let cos_heading = config.max_heading_deg.to_radians().cos();
+    let n = p.plane.normal;
+    let angle = angle_between_deg(&n, up);
+    let horizontal = n - up * n.dot(up);
+    let h = horizontal.norm();
+    is_flat_at_noise_level(p, config)
+        && p.quality.area_m2 >= config.inclined_min_area_m2
+        && angle > config.parallel_tolerance_deg
+        && angle <= config.max_slope_deg
+        && h > 1e-9
+        && horizontal.dot(forward).abs() >= cos_heading * h
+        && p.centroid.dot(forward) > 0.0
 }
 
 /// The optical axis projected perpendicular to `up`, unit; when the camera

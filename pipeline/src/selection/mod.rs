@@ -16,12 +16,16 @@
 //!    measured on all of its segments; else the mount's plane
 //!    (`ground_from_mount`); else `NoGround`.
 //! 4. **Forward.** The optical axis projected onto the ground.
-//! 5. **Inclined plane** ([`inclined`]): the nearest well-supported plane
-//!    ahead that is inclined (not parallel, not facing down) and faces along
-//!    forward; else `NoInclinedPlane`.
-//! 6. **Sign.** Uphill (positive) when the inclined plane's normal points
+//! 5. **Surfaces** ([`surfaces`], [`roles`]): every plane described in the
+//!    ground frame (slope, heading, extents, heights) with a role: ground,
+//!    step, ramp, wall, elevated, overhang.
+//! 6. **The road** ([`road`]): the nearest ramp or wall in the robot's
+//!    corridor that passes the inclined plane's tests ([`inclined`]: flat,
+//!    large enough, inclined, not facing down, facing along forward); else
+//!    `NoInclinedPlane`.
+//! 7. **Sign.** Uphill (positive) when the inclined plane's normal points
 //!    back towards the robot, downhill (negative) when it points forward.
-//! 7. **Distance.** Along the optical axis to the inclined plane.
+//! 8. **Distance.** Along the optical axis to the inclined plane.
 //!
 //! The chosen planes' pixels (`segment.rs`): the inclined plane's, and the
 //! ground's segments joined into one, their quality pooled
@@ -29,9 +33,16 @@
 
 mod config;
 pub mod ground;
+mod ground_frame;
+mod hidden_foot;
 pub mod inclined;
 pub mod quality;
+pub mod road;
+mod road_config;
+pub mod roles;
+mod scene;
 mod segment;
+pub mod surfaces;
 
 use nalgebra::Vector3;
 use slope_ipc_types::EstimateStatus;
@@ -43,9 +54,16 @@ use crate::sensor_noise::NoiseModel;
 
 pub use config::SelectionConfig;
 pub use ground::Ground;
+pub use ground_frame::GroundFrame;
+pub use hidden_foot::foot_is_hidden;
 pub use inclined::{axis_distance, forward_direction, slope_sign};
 pub use quality::{plane_quality, PlaneQuality};
+pub use road::{choose_road, Road};
+pub use road_config::RoadConfig;
+pub use roles::assign_roles;
+pub use scene::{survey_surfaces, RoadScene, SurveyInput};
 pub(crate) use segment::{chosen_segments, PlaneSegment};
+pub use surfaces::{describe_surfaces, plane_axes, Surface, CORRIDOR_MIN_PIXELS, EXTENT_SAMPLES};
 
 /// What selection needs to know about a segmented plane.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -18,7 +18,9 @@ use slope_ipc_types::{
 use slope_pipeline::tracking::StreamPosition;
 use slope_pipeline::{parse_method, CloudView, Estimator, EstimatorConfig, FrameInfo};
 use slope_sensor::cloud_checks::check_cloud;
-use slope_sensor::ipc::{create_node, CloudSubscriber, EstimatePublisher, HealthPublisher};
+use slope_sensor::ipc::{
+    create_node, CloudSubscriber, EstimatePublisher, HealthPublisher, SurfacesPublisher,
+};
 use slope_sensor::publish::StopFlag;
 
 use crate::cli::{max_frames_arg, node_name, wait_loop, CommonArgs, SilenceNote};
@@ -180,6 +182,7 @@ fn estimate(
     let node = create_node(&node_name("slope-estimator"))?;
     let subscriber = CloudSubscriber::create(&node, &names)?;
     let publisher = EstimatePublisher::create(&node, &names)?;
+    let surfaces = SurfacesPublisher::create(&node, &names)?;
     let health_publisher = if health_interval_s > 0.0 {
         Some(HealthPublisher::create(&node, &names)?)
     } else {
@@ -189,6 +192,7 @@ fn estimate(
         method = config.method.name(),
         clouds = subscriber.service_name(),
         estimates = %names.estimate(),
+        surfaces = %names.surfaces(),
         "estimator ready"
     );
     let health = HealthReporter::new(
@@ -196,7 +200,11 @@ fn estimate(
         health_publisher,
         health_interval_s,
     );
-    let mut worker = Worker::new(config, &subscriber, &publisher, args.max_frames, health);
+    let outputs = Outputs {
+        estimates: &publisher,
+        surfaces: &surfaces,
+    };
+    let mut worker = Worker::new(config, &subscriber, outputs, args.max_frames, health);
     worker.max_points = args.max_points;
     serve(&mut worker, stop, manager)?;
     tracing::info!(
@@ -339,7 +347,7 @@ struct Worker<'a> {
     /// no name).
     sensor: [u8; SENSOR_NAME_LEN],
     subscriber: &'a CloudSubscriber,
-    publisher: &'a EstimatePublisher,
+    publisher: Outputs<'a>,
     stats: EstimatorStats,
     /// Index and capture time of the last cloud.
     last_frame: Option<StreamPosition>,
@@ -354,13 +362,20 @@ struct Worker<'a> {
     rejected: RejectedClouds,
 }
 
+/// Where a worker publishes each frame: the estimate and its surfaces.
+#[derive(Clone, Copy)]
+struct Outputs<'a> {
+    estimates: &'a EstimatePublisher,
+    surfaces: &'a SurfacesPublisher,
+}
+
 impl<'a> Worker<'a> {
     /// A worker that has processed nothing yet, its estimator built for a
     /// cloud without a sensor name until the first cloud says otherwise.
     fn new(
         config: EstimatorConfig,
         subscriber: &'a CloudSubscriber,
-        publisher: &'a EstimatePublisher,
+        publisher: Outputs<'a>,
         max_frames: Option<u64>,
         health: HealthReporter,
     ) -> Self {
@@ -451,7 +466,7 @@ impl Worker<'_> {
             method: self.config.method as u32,
             ..SlopeEstimate::default()
         };
-        self.publisher.publish(&message)?;
+        self.publisher.estimates.publish(&message)?;
         self.stats.processed += 1;
         self.health.monitor.frame_out(None, &[]);
         Ok(())
@@ -507,7 +522,13 @@ impl Worker<'_> {
             self.last_slope_deg = Some(estimate.slope_deg);
         }
         drop(sample);
-        let sent = self.publisher.publish(&message)?;
+        let sent = self.publisher.estimates.publish(&message)?;
+        self.publisher.surfaces.publish(|surfaces| {
+            (surfaces.frame_index, surfaces.capture_stamp_ns) =
+                (header.frame_index, header.capture_stamp_ns);
+            surfaces.source_stamp_ns = header.source_stamp_ns;
+            estimate.write_surfaces(surfaces);
+        })?;
         self.stats.processed += 1;
         let mut stages = estimate.timings.stages.clone();
         stages.push(("total", estimate.timings.total_ms));

@@ -32,7 +32,9 @@ pub enum SurfaceKind {
     /// The vertical sides of an ascending ramp, or the banks beside a
     /// descending one.
     RampSide,
-    /// The vertical back (or underside) of the ramp solid.
+    /// The vertical back (face 1), the underside (face 0) and, under a
+    /// raised foot line (`[ramp] base_m`), the vertical riser (face 2) of
+    /// the ramp solid.
     RampBack,
     /// A side wall (`[[walls]]`), indexed.
     Wall,
@@ -49,6 +51,11 @@ pub enum SurfaceKind {
     /// A block with bumpy top and sides (`[[soft_blocks]]`), indexed; faces
     /// are [`BoxFace`]s. Its top and sides are not planar.
     SoftBlock,
+    /// A flat board (`[[panels]]`), indexed; faces are [`BoxFace`]s in the
+    /// board's own frame: `Top` the surface facing up its normal, `Bottom`
+    /// the back, `Near` the lower edge, `Far` the upper edge, `Inner` /
+    /// `Outer` the left / right ends seen looking up the slope.
+    Panel,
 }
 
 /// One surface of the scene: a kind, which object of that kind (walls,

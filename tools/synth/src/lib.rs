@@ -1,6 +1,6 @@
 //! `slope-synth`: a Kinect v2 scene simulator. It ray-casts scenes (ground,
 //! an ascending or descending inclined plane with an optional landing, side
-//! walls, boxes, tables, a ceiling, soft blocks with bumpy faces) through a
+//! walls, boxes, tables, a ceiling, soft blocks with bumpy faces, panels) through a
 //! pinhole depth camera, applies a sensor model (axial and lateral noise,
 //! flying pixels, multipath, dropouts, range limits, quantisation, pose
 //! jitter) and writes recordings in the format of
@@ -11,7 +11,8 @@
 //! - `bump_field.rs`: smooth random bumps (a sum of plane waves) on a face.
 //! - `soft_solid.rs`: a box with bumpy top and sides, and its ray march.
 //! - `scene.rs`: the scene description (TOML scene files); the clutter
-//!   objects (tables, ceiling, soft blocks) in `scene/clutter.rs`.
+//!   objects (tables, ceiling, soft blocks) in `scene/clutter.rs`, panels
+//!   in `scene/panel.rs`.
 //! - `world.rs`: a scene turned into solids and concave junctions; one file
 //!   per kind of clutter under `world/`.
 //! - `camera.rs`: camera pose (mount convention) and pixel rays.
@@ -54,8 +55,8 @@ pub use recording::{
 };
 pub use render::{quantise, render_depth, render_frame, DEPTH_UNIT_M};
 pub use scene::{
-    load_scene_file, parse_scene, CameraModel, Ceiling, GroundBox, Motion, MountPose, Ramp, Scene,
-    SceneFile, SideWall, SlopeDirection, SoftBlock, Table,
+    load_scene_file, parse_scene, CameraModel, Ceiling, GroundBox, Motion, MountPose, Panel, Ramp,
+    Scene, SceneFile, SideWall, SlopeDirection, SoftBlock, Table,
 };
 pub use sensor_model::{axial_sigma_m, SensorModel};
 pub use world::World;

@@ -14,7 +14,9 @@ use crate::error::SceneError;
 use crate::sensor_model::SensorModel;
 
 mod clutter;
+mod panel;
 pub use clutter::{Ceiling, SoftBlock, Table};
+pub use panel::Panel;
 
 /// Everything that is in front of the camera, and the camera itself.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
@@ -38,6 +40,9 @@ pub struct Scene {
     pub ceiling: Option<Ceiling>,
     /// `[[soft_blocks]]`: blocks with bumpy top and sides (beds, sofas).
     pub soft_blocks: Vec<SoftBlock>,
+    /// `[[panels]]`: flat boards at any tilt and heading (free-standing
+    /// walls, leaning or propped-up boards).
+    pub panels: Vec<Panel>,
 }
 
 /// Pinhole depth camera, pixel centres at integer coordinates (the ray
@@ -137,6 +142,11 @@ pub struct Ramp {
     pub yaw_deg: f64,
     /// Sideways offset of the foot line's centre, metres, positive right.
     pub offset_m: f64,
+    /// Height of the foot line above the ground, metres (ascending only;
+    /// 0 = the ramp starts on the ground). A raised ramp stands on a
+    /// vertical riser of this height under its foot line (its front face),
+    /// and its sides and back reach down to the ground.
+    pub base_m: f64,
 }
 
 impl Default for Ramp {
@@ -150,6 +160,7 @@ impl Default for Ramp {
             landing_m: 1.0,
             yaw_deg: 0.0,
             offset_m: 0.0,
+            base_m: 0.0,
         }
     }
 }
@@ -253,18 +264,24 @@ impl Scene {
         for (i, block) in self.soft_blocks.iter().enumerate() {
             block.validate(i)?;
         }
+        for (i, panel) in self.panels.iter().enumerate() {
+            panel.validate(i)?;
+        }
         self.check_object_count()
     }
 
     /// The surfaces index their object in a `u16`: fewer than 65535
     /// objects in all.
     fn check_object_count(&self) -> Result<(), SceneError> {
-        let objects =
-            self.walls.len() + self.boxes.len() + self.tables.len() + self.soft_blocks.len();
+        let objects = self.walls.len()
+            + self.boxes.len()
+            + self.tables.len()
+            + self.soft_blocks.len()
+            + self.panels.len();
         check(
             objects < usize::from(u16::MAX),
             "boxes",
-            "too many objects (walls + boxes + tables + soft_blocks must be < 65535)",
+            "too many objects (walls + boxes + tables + soft_blocks + panels must be < 65535)",
         )
     }
 }
@@ -325,6 +342,16 @@ impl Ramp {
             self.offset_m.is_finite(),
             "ramp.offset_m",
             "must be a finite number",
+        )?;
+        check(
+            self.base_m.is_finite() && self.base_m >= 0.0,
+            "ramp.base_m",
+            "must be finite and >= 0",
+        )?;
+        check(
+            !(self.direction == SlopeDirection::Descending && self.base_m > 0.0),
+            "ramp.base_m",
+            "must be 0 for a descending slope (it starts on the ground the robot stands on)",
         )
     }
 }

@@ -24,6 +24,7 @@ pub fn base_rgb(kind: SurfaceKind) -> [u8; 3] {
         SurfaceKind::TableLeg => [96, 72, 50],
         SurfaceKind::Ceiling => [224, 222, 212],
         SurfaceKind::SoftBlock => [118, 150, 108],
+        SurfaceKind::Panel => [186, 160, 96],
     }
 }
 

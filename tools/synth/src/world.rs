@@ -12,9 +12,13 @@
 //! - Tables: a slab and four legs, box solids (`world/table.rs`).
 //! - Ceiling: one convex solid above its height (`world/ceiling.rs`).
 //! - Soft blocks: one ray-marched [`SoftSolid`] each (`world/soft_block.rs`).
+//! - Panels: one tilted, yawed slab each (`world/panel.rs`).
+//! - A ramp whose foot is raised (`base_m`) stands on a vertical riser: its
+//!   solid reaches the ground under the foot line.
 
 mod blocks;
 mod ceiling;
+mod panel;
 mod soft_block;
 mod table;
 
@@ -81,6 +85,9 @@ impl World {
         for (i, block) in scene.soft_blocks.iter().enumerate() {
             world.add_soft_block(block, surface_index(i));
         }
+        for (i, panel) in scene.panels.iter().enumerate() {
+            world.add_panel(panel, surface_index(i));
+        }
         world
     }
 
@@ -124,13 +131,21 @@ impl World {
         let (run, rise) = frame.run_rise(ramp);
         let (sa, ca) = ramp.slope_deg.to_radians().sin_cos();
         let half_width = ramp.width_m / 2.0;
+        // A raised foot stands on a riser: the solid reaches down to the
+        // ground (frame z = -base) and has a vertical front under the foot line.
+        let base = ramp.base_m;
         let mut solid = ConvexSolid::default();
         solid
             .faces
-            .push(frame.face([0.0, 0.0, 0.0], [0.0, 0.0, -1.0], RAMP_UNDERSIDE));
+            .push(frame.face([0.0, 0.0, -base], [0.0, 0.0, -1.0], RAMP_UNDERSIDE));
         solid
             .faces
             .push(frame.face([0.0, 0.0, 0.0], [0.0, -sa, ca], RAMP));
+        if base > 0.0 {
+            solid
+                .faces
+                .push(frame.face([0.0, 0.0, 0.0], [0.0, -1.0, 0.0], RAMP_FRONT));
+        }
         let mut back_y = f64::INFINITY;
         if rise.is_finite() {
             back_y = if ramp.slope_deg >= 90.0 && ramp.landing_m == 0.0 {
@@ -155,18 +170,20 @@ impl World {
         }
         self.solids.push(solid);
 
+        // The ground meets the ramp at its foot line, or the riser under it.
         let edge = half_width.min(UNBOUNDED_EDGE_M);
+        let foot = if base > 0.0 { RAMP_FRONT } else { RAMP };
         self.junctions.push(ConcaveJunction {
-            a: frame.point([-edge, 0.0, 0.0]),
-            b: frame.point([edge, 0.0, 0.0]),
-            surfaces: [GROUND, RAMP],
+            a: frame.point([-edge, 0.0, -base]),
+            b: frame.point([edge, 0.0, -base]),
+            surfaces: [GROUND, foot],
         });
         if half_width.is_finite() {
             let end = back_y.min(UNBOUNDED_EDGE_M);
             for (x, side) in [(-half_width, RAMP_LEFT), (half_width, RAMP_RIGHT)] {
                 self.junctions.push(ConcaveJunction {
-                    a: frame.point([x, 0.0, 0.0]),
-                    b: frame.point([x, end, 0.0]),
+                    a: frame.point([x, 0.0, -base]),
+                    b: frame.point([x, end, -base]),
                     surfaces: [GROUND, side],
                 });
             }
@@ -294,6 +311,7 @@ const RAMP_LEFT: Surface = Surface::new(SurfaceKind::RampSide, 0, 0);
 const RAMP_RIGHT: Surface = Surface::new(SurfaceKind::RampSide, 0, 1);
 const RAMP_UNDERSIDE: Surface = Surface::new(SurfaceKind::RampBack, 0, 0);
 const RAMP_BACK: Surface = Surface::new(SurfaceKind::RampBack, 0, 1);
+const RAMP_FRONT: Surface = Surface::new(SurfaceKind::RampBack, 0, 2);
 
 fn ground_half_space() -> ConvexSolid {
     ConvexSolid {
@@ -318,7 +336,7 @@ impl RampFrame {
     fn new(ramp: &Ramp) -> Self {
         let (s, c) = ramp.yaw_deg.to_radians().sin_cos();
         Self {
-            origin: Pos3::new(ramp.offset_m, ramp.distance_m, 0.0),
+            origin: Pos3::new(ramp.offset_m, ramp.distance_m, ramp.base_m),
             across: Vec3::new(c, s, 0.0),
             along: Vec3::new(-s, c, 0.0),
         }
@@ -401,6 +419,49 @@ mod tests {
             Some((0.0, SurfaceKind::Ground))
         );
         assert_eq!(terrain(&world, 1.2, 2.5), Some((0.0, SurfaceKind::Ground)));
+    }
+
+    #[test]
+    fn raised_foot_stands_on_a_riser() {
+        let ramp = Ramp {
+            slope_deg: 16.0,
+            distance_m: 2.0,
+            width_m: 1.2,
+            length_m: 2.0,
+            landing_m: 0.5,
+            base_m: 0.1,
+            ..Ramp::default()
+        };
+        let world = World::build(&Scene {
+            ramp: Some(ramp),
+            ..Scene::default()
+        });
+        let tan = 16f64.to_radians().tan();
+        for y in [1.99, 2.001, 2.5, 3.5] {
+            let (z, kind) = terrain(&world, 0.2, y).expect("terrain everywhere");
+            if y < 2.0 {
+                assert_eq!((z, kind), (0.0, SurfaceKind::Ground));
+            } else {
+                assert_eq!(kind, SurfaceKind::Ramp, "y = {y}");
+                assert!((z - (0.1 + (y - 2.0) * tan)).abs() < 1e-12, "y = {y}: {z}");
+            }
+        }
+        // The riser under the foot line faces the camera, 0.1 m high.
+        for (z, front) in [(0.05, true), (0.099, true), (0.101, false)] {
+            let hit = world
+                .cast(&Ray {
+                    origin: Pos3::new(0.3, 0.0, z),
+                    direction: Vec3::y(),
+                })
+                .expect("hits the ramp");
+            assert_eq!(hit.surface == RAMP_FRONT, front, "z = {z}");
+            if front {
+                assert!((hit.t - 2.0).abs() < 1e-12);
+            }
+        }
+        // Beside the ramp: ground; the raised ramp meets the ground at its riser.
+        assert_eq!(terrain(&world, 0.7, 2.5), Some((0.0, SurfaceKind::Ground)));
+        assert!(world.junctions.iter().all(|j| j.a.z == 0.0 && j.b.z == 0.0));
     }
 
     #[test]

@@ -12,7 +12,7 @@ use super::locate::{first_line_of, key_path, line_of};
 use super::sections::SlopeFile;
 
 /// The top-level keys of [`EstimatorConfig`](slope_pipeline::EstimatorConfig), which live under `[estimator]`.
-const ESTIMATOR_KEYS: [&str; 10] = [
+const ESTIMATOR_KEYS: [&str; 11] = [
     "method",
     "seed",
     "outlier",
@@ -22,6 +22,7 @@ const ESTIMATOR_KEYS: [&str; 10] = [
     "kmeans",
     "cumulative",
     "selection",
+    "road",
     "tracking",
 ];
 

@@ -31,6 +31,11 @@ pub struct Table {
     /// Rotation about the vertical, degrees, positive counter-clockwise
     /// seen from above.
     pub yaw_deg: f64,
+    /// Slope of the top, degrees, in (-45, 45): the slab turned about its
+    /// own across axis through the centre of its top surface, far edge up
+    /// (negative: near edge up). `top_m` is then the height of the top
+    /// surface's centre; the legs stay vertical and reach the underside.
+    pub tilt_deg: f64,
 }
 
 impl Default for Table {
@@ -43,6 +48,7 @@ impl Default for Table {
             thickness_m: 0.04,
             leg_m: 0.05,
             yaw_deg: 0.0,
+            tilt_deg: 0.0,
         }
     }
 }
@@ -68,17 +74,38 @@ impl Table {
             "must be finite and > 0",
         )?;
         check(
-            self.top_m.is_finite() && self.top_m > self.thickness_m,
-            &key("top_m"),
-            "must be finite and > thickness_m (the legs need a length)",
+            self.tilt_deg.is_finite() && self.tilt_deg.abs() < 45.0,
+            &key("tilt_deg"),
+            "must lie in (-45, 45)",
         )?;
-        let narrowest = self.size_m[0].min(self.size_m[1]);
+        if self.tilt_deg == 0.0 {
+            check(
+                self.top_m.is_finite() && self.top_m > self.thickness_m,
+                &key("top_m"),
+                "must be finite and > thickness_m (the legs need a length)",
+            )?;
+        } else {
+            check(
+                self.top_m.is_finite() && self.lowest_underside_m() > 0.0,
+                &key("top_m"),
+                "must be finite and > thickness_m * cos(tilt) + size_m[1] / 2 * sin|tilt| \
+                 (the lowest corner of the underside above the ground)",
+            )?;
+        }
+        let narrowest = self.size_m[0].min(self.size_m[1] * self.tilt_deg.to_radians().cos());
         check(
             self.leg_m.is_finite() && self.leg_m > 0.0 && self.leg_m <= narrowest / 2.0,
             &key("leg_m"),
-            "must lie in (0, min(size_m) / 2]",
+            "must lie in (0, min(size_m[0], size_m[1] * cos(tilt)) / 2]",
         )?;
         check(self.yaw_deg.is_finite(), &key("yaw_deg"), "must be finite")
+    }
+
+    /// Height of the lowest corner of the slab (its underside at the
+    /// lower edge), metres.
+    pub fn lowest_underside_m(&self) -> f64 {
+        let (s, c) = self.tilt_deg.to_radians().sin_cos();
+        self.top_m - self.size_m[1] / 2.0 * s.abs() - self.thickness_m * c
     }
 }
 
@@ -234,7 +261,7 @@ mod tests {
             }
             .validate(0),
         );
-        assert!(text.contains("tables[0].leg_m") && text.contains("(0, min(size_m) / 2]"));
+        assert!(text.contains("tables[0].leg_m") && text.contains("(0, min(size_m[0]"));
         let text = reason(
             Table {
                 size_m: [1.0, 0.0],
@@ -243,6 +270,43 @@ mod tests {
             .validate(0),
         );
         assert!(text.contains("tables[0].size_m"), "{text}");
+    }
+
+    #[test]
+    fn tilted_table_errors_name_key_and_range() {
+        let tilted = Table {
+            tilt_deg: 12.0,
+            ..Table::default()
+        };
+        tilted.validate(0).expect("a 12° top 0.75 m high is valid");
+        let text = reason(
+            Table {
+                tilt_deg: 45.0,
+                ..Table::default()
+            }
+            .validate(1),
+        );
+        assert!(text.contains("tables[1].tilt_deg") && text.contains("(-45, 45)"));
+        // 0.8 m deep at 30°: the near edge drops 0.2 m, the underside 0.035 m more.
+        let low = Table {
+            tilt_deg: -30.0,
+            top_m: 0.2,
+            ..Table::default()
+        };
+        assert!(low.lowest_underside_m() < 0.0);
+        let text = reason(low.validate(0));
+        assert!(text.contains("tables[0].top_m") && text.contains("lowest corner"));
+        // Legs as wide as the tilted top's horizontal depth allows.
+        let text = reason(
+            Table {
+                tilt_deg: 40.0,
+                size_m: [1.2, 0.2],
+                leg_m: 0.09,
+                ..Table::default()
+            }
+            .validate(0),
+        );
+        assert!(text.contains("tables[0].leg_m"), "{text}");
     }
 
     #[test]

@@ -1,0 +1,298 @@
+//! Every segmented plane described in the robot's terms: a [`Surface`] in
+//! the [`GroundFrame`], from one pass over (a sample of) its inliers.
+//!
+//! The ground's segments become one surface (the first); every other plane
+//! one surface each. The figures: slope and heading of the plane relative
+//! to the ground, the forward distance to its nearest and farthest inlier,
+//! the lateral positions of its leftmost and rightmost inlier, the heights
+//! of its lowest and highest inlier, the rectangle in its plane that holds
+//! its inliers, and how much of it lies in the robot's corridor. Roles come
+//! after (`roles.rs`), the road last (`road.rs`).
+//!
+//! Planes of more than [`EXTENT_SAMPLES`] inliers are walked on an evenly
+//! spaced sample of them (every k-th in pixel order: every row of the
+//! plane keeps samples, so its extremes are off by at most k pixels along a
+//! row, a few centimetres on the ground's edges); a ramp or a riser of a
+//! few thousand pixels is walked whole.
+
+use nalgebra::Vector3;
+use slope_ipc_types::{SurfaceRole, SurfaceSupport};
+
+use super::quality::PooledQuality;
+use super::{is_flat_at_noise_level, GroundFrame, PlaneSummary, RoadConfig, SelectionConfig};
+use crate::cloud::CloudView;
+use crate::plane_fit::Plane;
+use crate::ransac_planes::SegmentedPlane;
+
+/// A plane's extremes are taken over at most about this many inliers.
+pub const EXTENT_SAMPLES: usize = 8192;
+
+/// A surface reaches into the corridor with at least this many inliers
+/// there (a plane's stray edge pixel does not).
+pub const CORRIDOR_MIN_PIXELS: usize = 50;
+
+/// One surface in view.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Surface {
+    /// Index of its segmented plane (for the ground: its lowest segment).
+    pub plane_index: usize,
+    /// Segmented planes joined into it (the ground's segments; else 1).
+    pub segments: usize,
+    pub role: SurfaceRole,
+    pub support: SurfaceSupport,
+    /// Index (in the frame's surfaces) of the ground or step it stands on.
+    pub supported_by: Option<usize>,
+    /// It joins the ground, directly or through a chain of steps (or its
+    /// foot is hidden: `support` says which).
+    pub joins_ground: bool,
+    /// At least [`CORRIDOR_MIN_PIXELS`] of its inliers lie in the corridor.
+    pub in_corridor: bool,
+    /// Flat at the sensor's noise level and large enough to measure a slope
+    /// on (the selection's tests of an inclined plane).
+    pub measurable: bool,
+    /// Camera frame, unit normal towards the camera.
+    pub plane: Plane,
+    pub inliers: usize,
+    /// Signed as the estimate's slope: + rising away from the robot.
+    pub slope_deg: f64,
+    /// Uphill direction from forward, degrees, + left; NaN when level.
+    pub heading_deg: f64,
+    pub distance_m: f64,
+    pub far_m: f64,
+    pub left_m: f64,
+    pub right_m: f64,
+    pub lowest_m: f64,
+    pub highest_m: f64,
+    pub area_m2: f64,
+    pub rms_m: f64,
+    pub noise_ratio: f64,
+    /// Forward distance to its nearest inlier in the corridor; NaN when
+    /// none is there.
+    pub corridor_distance_m: f64,
+    /// Mean forward distance of its inliers in the corridor; NaN when none
+    /// is there.
+    pub corridor_mean_m: f64,
+    /// Corners of the rectangle in its plane holding its inliers, camera
+    /// frame, in order around it.
+    pub outline: [Vector3<f64>; 4],
+}
+
+impl Surface {
+    /// Angle between its plane and the ground's, degrees, unsigned.
+    pub fn tilt_deg(&self) -> f64 {
+        self.slope_deg.abs()
+    }
+}
+
+/// The surfaces of every plane in `planes` over `frame`: the ground's
+/// segments (`ground`, lowest first; empty for a ground from the mount)
+/// joined into the first, then every other plane in index order. Roles are
+/// left `Elevated` and supports `None` for `roles.rs` to set (the ground's
+/// role is `Ground`).
+pub fn describe_surfaces(
+    cloud: &CloudView<'_>,
+    planes: &[SegmentedPlane],
+    summaries: &[PlaneSummary],
+    ground: &[usize],
+    frame: &GroundFrame,
+    selection: &SelectionConfig,
+    road: &RoadConfig,
+) -> Vec<Surface> {
+    let mut surfaces = Vec::with_capacity(planes.len());
+    if let Some(&lowest) = ground.first() {
+        let lists: Vec<&[u32]> = ground
+            .iter()
+            .map(|&k| planes[k].inliers.as_slice())
+            .collect();
+        let mut pooled = PooledQuality::default();
+        for &k in ground {
+            pooled.add(
+                planes[k].inliers.len(),
+                planes[k].rms_m,
+                &summaries[k].quality,
+            );
+        }
+        let inliers = lists.iter().map(|l| l.len()).sum();
+        let quality = pooled.quality(inliers);
+        let mut s = describe(cloud, &lists, &planes[lowest].plane, frame, road);
+        s.plane_index = lowest;
+        s.segments = ground.len();
+        s.role = SurfaceRole::Ground;
+        s.joins_ground = true;
+        s.slope_deg = 0.0;
+        s.heading_deg = f64::NAN;
+        (s.area_m2, s.rms_m, s.noise_ratio) = (quality.area_m2, quality.rms_m, quality.noise_ratio);
+        surfaces.push(s);
+    }
+    for (k, plane) in planes.iter().enumerate() {
+        if ground.contains(&k) {
+            continue;
+        }
+        let mut s = describe(cloud, &[&plane.inliers], &plane.plane, frame, road);
+        s.plane_index = k;
+        let quality = &summaries[k].quality;
+        (s.area_m2, s.rms_m, s.noise_ratio) = (quality.area_m2, quality.rms_m, quality.noise_ratio);
+        s.measurable = is_flat_at_noise_level(&summaries[k], selection)
+            && quality.area_m2 >= selection.inclined_min_area_m2;
+        surfaces.push(s);
+    }
+    surfaces
+}
+
+/// One surface of `plane` over the inlier `lists` (pixel indices of
+/// `cloud`); its role and support are left for `roles.rs`.
+fn describe(
+    cloud: &CloudView<'_>,
+    lists: &[&[u32]],
+    plane: &Plane,
+    frame: &GroundFrame,
+    road: &RoadConfig,
+) -> Surface {
+    let (level, fall) = plane_axes(plane, frame);
+    let mut walk = Extents::new(road);
+    let total: usize = lists.iter().map(|l| l.len()).sum();
+    let stride = total.div_ceil(EXTENT_SAMPLES).max(1);
+    for list in lists {
+        for &pixel in list.iter().step_by(stride) {
+            if let Some(p) = cloud.point(pixel as usize) {
+                walk.add(&p, frame, &level, &fall);
+            }
+        }
+    }
+    let tilt = frame.tilt_deg(&plane.normal);
+    Surface {
+        plane_index: 0,
+        segments: 1,
+        role: SurfaceRole::Elevated,
+        support: SurfaceSupport::None,
+        supported_by: None,
+        joins_ground: false,
+        in_corridor: walk.corridor_pixels * stride >= CORRIDOR_MIN_PIXELS,
+        measurable: false,
+        plane: *plane,
+        inliers: total,
+        slope_deg: super::slope_sign(&plane.normal, &frame.forward) * tilt,
+        heading_deg: frame.heading_deg(&plane.normal),
+        distance_m: finite_or_nan(walk.ahead.0),
+        far_m: finite_or_nan(walk.ahead.1),
+        left_m: finite_or_nan(walk.lateral.0),
+        right_m: finite_or_nan(walk.lateral.1),
+        lowest_m: finite_or_nan(walk.height.0),
+        highest_m: finite_or_nan(walk.height.1),
+        area_m2: f64::NAN,
+        rms_m: f64::NAN,
+        noise_ratio: f64::NAN,
+        corridor_distance_m: finite_or_nan(walk.corridor_ahead),
+        corridor_mean_m: walk.corridor_sum / walk.corridor_pixels as f64,
+        outline: walk.outline(plane, &level, &fall),
+    }
+}
+
+/// Two unit directions in `plane`: along its level line (horizontal) and
+/// up its fall line (`fall . up >= 0`); for a level plane, the robot's
+/// right and forward projected into it.
+pub fn plane_axes(plane: &Plane, frame: &GroundFrame) -> (Vector3<f64>, Vector3<f64>) {
+    let n = plane.normal;
+    let level = frame
+        .up
+        .cross(&n)
+        .try_normalize(1e-6)
+        .or_else(|| (frame.right - n * n.dot(&frame.right)).try_normalize(1e-9))
+        .unwrap_or(frame.right);
+    let fall = n.cross(&level);
+    let fall = if fall.dot(&frame.up) < 0.0 {
+        -fall
+    } else {
+        fall
+    };
+    (level, fall)
+}
+
+/// Running extremes of a surface's inliers.
+struct Extents {
+    half_width_m: f64,
+    look_ahead_m: f64,
+    ahead: (f64, f64),
+    lateral: (f64, f64),
+    height: (f64, f64),
+    along: (f64, f64),
+    up_fall: (f64, f64),
+    corridor_pixels: usize,
+    corridor_ahead: f64,
+    corridor_sum: f64,
+}
+
+impl Extents {
+    fn new(road: &RoadConfig) -> Self {
+        let empty = (f64::INFINITY, f64::NEG_INFINITY);
+        Self {
+            half_width_m: road.corridor_half_width_m,
+            look_ahead_m: road.look_ahead_m,
+            ahead: empty,
+            lateral: empty,
+            height: empty,
+            along: empty,
+            up_fall: empty,
+            corridor_pixels: 0,
+            corridor_ahead: f64::INFINITY,
+            corridor_sum: 0.0,
+        }
+    }
+
+    fn add(
+        &mut self,
+        p: &Vector3<f64>,
+        frame: &GroundFrame,
+        level: &Vector3<f64>,
+        fall: &Vector3<f64>,
+    ) {
+        let ahead = frame.ahead(p);
+        let lateral = frame.lateral(p);
+        widen(&mut self.ahead, ahead);
+        widen(&mut self.lateral, lateral);
+        widen(&mut self.height, frame.height(p));
+        widen(&mut self.along, level.dot(p));
+        widen(&mut self.up_fall, fall.dot(p));
+        if lateral.abs() <= self.half_width_m && ahead > 0.0 && ahead <= self.look_ahead_m {
+            self.corridor_pixels += 1;
+            self.corridor_ahead = self.corridor_ahead.min(ahead);
+            self.corridor_sum += ahead;
+        }
+    }
+
+    /// The rectangle of the extremes along `level` and `fall`, on `plane`.
+    fn outline(
+        &self,
+        plane: &Plane,
+        level: &Vector3<f64>,
+        fall: &Vector3<f64>,
+    ) -> [Vector3<f64>; 4] {
+        if self.along.0 > self.along.1 {
+            return [Vector3::repeat(f64::NAN); 4];
+        }
+        let foot = -plane.normal * plane.d;
+        let corner = |s: f64, t: f64| foot + level * s + fall * t;
+        let (s, t) = (self.along, self.up_fall);
+        [
+            corner(s.0, t.0),
+            corner(s.1, t.0),
+            corner(s.1, t.1),
+            corner(s.0, t.1),
+        ]
+    }
+}
+
+/// Widens `range` to hold `v`.
+fn widen(range: &mut (f64, f64), v: f64) {
+    range.0 = range.0.min(v);
+    range.1 = range.1.max(v);
+}
+
+/// `f64::INFINITY` (nothing seen) as NaN.
+fn finite_or_nan(v: f64) -> f64 {
+    if v.is_finite() {
+        v
+    } else {
+        f64::NAN
+    }
+}
