@@ -412,10 +412,29 @@ impl Estimator {
             self.keep.extend(cloud.points.iter().map(is_measured));
             self.keep.iter().filter(|&&k| k).count()
         };
+        let kept = kept.min(keep_within_depth_range(
+            cloud,
+            self.depth_range_m(),
+            &mut self.keep,
+        ));
         if kept < self.config.ransac.min_plane_points.max(3) {
             return Err(EstimateStatus::TooFewPoints);
         }
         Ok(())
+    }
+
+    /// The depths read at all: `outlier.depth_range_m`, else the noise
+    /// model's.
+    fn depth_range_m(&self) -> (f64, f64) {
+        match self.config.outlier.depth_range_m {
+            Some([near, far]) => (near, far),
+            None => self
+                .config
+                .selection
+                .noise_model
+                .unwrap_or_default()
+                .depth_range_m(),
+        }
     }
 
     /// No inclined plane: the estimate says so, with the ground plane (its
@@ -740,3 +759,19 @@ const _: fn() = || {
     fn assert_send<T: Send>() {}
     assert_send::<Estimator>();
 };
+
+/// Drops from `keep` the points whose depth lies outside `(near, far)`
+/// metres (a saturated frame of 65.5 m read as a plane at 70 degrees);
+/// the points kept.
+fn keep_within_depth_range(
+    cloud: &CloudView<'_>,
+    (near, far): (f64, f64),
+    keep: &mut [bool],
+) -> usize {
+    let mut kept = 0;
+    for (keep, p) in keep.iter_mut().zip(cloud.points) {
+        *keep &= (near..=far).contains(&f64::from(p.z_m));
+        kept += usize::from(*keep);
+    }
+    kept
+}

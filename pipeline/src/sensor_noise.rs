@@ -54,6 +54,19 @@ impl NoiseModel {
         }
     }
 
+    /// The depths the sensor reads at all, metres along the optical axis:
+    /// a depth outside is no reading (a saturated or broken pixel, 65.5 m
+    /// of a raw 65535). Kinect v2: 0.5 m (libfreenect2's minimum) to 8 m
+    /// (its time-of-flight range with libfreenect2's `max_depth_m` raised
+    /// from 4.5 m); Kinect v1: 0.4 m (near mode) to 10 m (the farthest
+    /// disparity it reports). `outlier.depth_range_m` overrides it.
+    pub fn depth_range_m(self) -> (f64, f64) {
+        match self {
+            Self::Kinect2 => (0.5, 8.0),
+            Self::Kinect1 => (0.4, 10.0),
+        }
+    }
+
     /// One standard deviation of the depth error at depth `z_m` and
     /// incidence angle `theta_rad`, metres.
     #[inline]

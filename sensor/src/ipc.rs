@@ -32,6 +32,11 @@ pub const CLOUD_MAX_SUBSCRIBERS: usize = 6;
 /// Clouds a subscriber may hold unread. Two: the one being processed may
 /// be superseded by at most one newer one; older ones are stale anyway.
 pub const CLOUD_SUBSCRIBER_BUFFER: usize = 2;
+/// Clouds a recorder's subscriber may hold unread (the service's largest
+/// subscriber buffer): 133 ms at 30 Hz, for a recorder that must lose none
+/// while its receiving thread waits for a core. Each unit of it costs the
+/// publisher [`CLOUD_MAX_SUBSCRIBERS`] more samples of shared memory.
+pub const CLOUD_RECORDER_BUFFER: usize = 4;
 /// Most processes that may subscribe to estimates at once.
 pub const ESTIMATE_MAX_SUBSCRIBERS: usize = 16;
 /// Estimates a subscriber may hold unread (about 2 s at 30 Hz).
@@ -160,7 +165,7 @@ fn cloud_service(node: &Node<ipc::Service>, name: &str) -> Result<CloudService, 
         .user_header::<CloudHeader>()
         .max_publishers(1)
         .max_subscribers(CLOUD_MAX_SUBSCRIBERS)
-        .subscriber_max_buffer_size(CLOUD_SUBSCRIBER_BUFFER)
+        .subscriber_max_buffer_size(CLOUD_RECORDER_BUFFER)
         // The newest cloud so far plus the one just received.
         .subscriber_max_borrowed_samples(2)
         .history_size(0)
@@ -434,6 +439,7 @@ impl<Payload: Debug + IceoryxSend + ?Sized + 'static, Header: Debug + ZeroCopySe
         node: &Node<ipc::Service>,
         name: String,
         max_subscribers: usize,
+        buffer: Option<usize>,
         service: impl FnOnce(
             &Node<ipc::Service>,
             &str,
@@ -442,22 +448,25 @@ impl<Payload: Debug + IceoryxSend + ?Sized + 'static, Header: Debug + ZeroCopySe
         // The listener exists before the subscriber does, so no notification
         // for a sample this subscriber can see is ever missed.
         let listener = TopicListener::create(node, &name)?;
-        let subscriber = service(node, &name)?
-            .subscriber_builder()
-            .create()
-            .map_err(|e| match e {
-                SubscriberCreateError::ExceedsMaxSupportedSubscribers => IpcError {
-                    action: "create a subscriber",
-                    kind: "service",
-                    service: name.clone(),
-                    detail: format!(
-                        "the topic takes at most {max_subscribers} subscribers at once and has \
+        let factory = service(node, &name)?;
+        let builder = factory.subscriber_builder();
+        let builder = match buffer {
+            Some(buffer) => builder.buffer_size(buffer),
+            None => builder,
+        };
+        let subscriber = builder.create().map_err(|e| match e {
+            SubscriberCreateError::ExceedsMaxSupportedSubscribers => IpcError {
+                action: "create a subscriber",
+                kind: "service",
+                service: name.clone(),
+                detail: format!(
+                    "the topic takes at most {max_subscribers} subscribers at once and has \
                          that many: stop one (a slope-echo or slope-record left running?) or \
                          wait until one ends"
-                    ),
-                },
-                e => IpcError::new("create a subscriber", &name, e),
-            })?;
+                ),
+            },
+            e => IpcError::new("create a subscriber", &name, e),
+        })?;
         Ok(Self {
             subscriber,
             listener,
@@ -478,6 +487,21 @@ impl CloudSubscriber {
                 node,
                 names.cloud(),
                 CLOUD_MAX_SUBSCRIBERS,
+                Some(CLOUD_SUBSCRIBER_BUFFER),
+                cloud_service,
+            )?,
+        })
+    }
+
+    /// A subscriber that holds up to [`CLOUD_RECORDER_BUFFER`] clouds
+    /// unread (a recorder, which must lose none).
+    pub fn create_deep(node: &Node<ipc::Service>, names: &ServiceNames) -> Result<Self, IpcError> {
+        Ok(Self {
+            topic: TopicSubscriber::create(
+                node,
+                names.cloud(),
+                CLOUD_MAX_SUBSCRIBERS,
+                Some(CLOUD_RECORDER_BUFFER),
                 cloud_service,
             )?,
         })
@@ -576,6 +600,7 @@ impl EstimateSubscriber {
                 node,
                 names.estimate(),
                 ESTIMATE_MAX_SUBSCRIBERS,
+                None,
                 estimate_service,
             )?,
         })
@@ -655,6 +680,7 @@ impl SurfacesSubscriber {
                 node,
                 names.surfaces(),
                 SURFACES_MAX_SUBSCRIBERS,
+                None,
                 surfaces_service,
             )?,
         })
@@ -728,6 +754,7 @@ impl HealthSubscriber {
                 node,
                 names.health(),
                 HEALTH_MAX_SUBSCRIBERS,
+                None,
                 health_service,
             )?,
         })

@@ -2,8 +2,10 @@
 //! frame sources (recordings, the Kinect v2) and the zero-copy publishing
 //! path into iceoryx2 shared memory.
 
+pub mod cloud_checks;
 pub mod device_lock;
 pub mod error_chain;
+pub mod input_file;
 pub mod interruptible;
 pub mod ipc;
 #[cfg(feature = "kinect2")]

@@ -182,6 +182,7 @@ pub fn publish_stream_observed(
     let mut frame = SourceFrame::default();
     let mut clock: Option<(Instant, u64)> = None;
     let mut sent_at_rate: u64 = 0;
+    let mut warned_rows = std::collections::HashSet::new();
     loop {
         if stop.is_stopped() {
             stats.stopped = true;
@@ -193,9 +194,15 @@ pub fn publish_stream_observed(
         match source.next_frame(&mut frame) {
             Ok(true) => {}
             Ok(false) => break,
-            Err(err @ SourceError::BadFrame { .. }) if options.skip_bad_frames => {
+            Err(err @ SourceError::BadFrame { row, .. }) if options.skip_bad_frames => {
                 stats.skipped_bad += 1;
-                tracing::warn!(error = %crate::error_chain::ErrorChain(&err), "skipping bad frame");
+                // One warning per bad frame per run: a loop meets it again
+                // on every pass.
+                if warned_rows.insert(row) {
+                    tracing::warn!(error = %crate::error_chain::ErrorChain(&err), "skipping bad frame");
+                } else {
+                    tracing::debug!(error = %crate::error_chain::ErrorChain(&err), "skipping bad frame again");
+                }
                 continue;
             }
             Err(err) => return Err(err.into()),

@@ -606,3 +606,119 @@ fn a_frame_larger_than_the_limit_is_refused_before_any_allocation() {
         &["100000 x 100000", "10000000000 points", "limit is 1048576"],
     );
 }
+
+fn mkfifo(path: &Path) {
+    let made = std::process::Command::new("mkfifo")
+        .arg(path)
+        .status()
+        .expect("mkfifo runs");
+    assert!(made.success(), "mkfifo {}", path.display());
+}
+
+/// The chain of `err`, its causes joined by ": ".
+fn chain(err: &RecordingError) -> String {
+    let mut text = err.to_string();
+    let mut source = std::error::Error::source(err);
+    while let Some(cause) = source {
+        text.push_str(&format!(": {cause}"));
+        source = cause.source();
+    }
+    text
+}
+
+/// `work` on a thread, its result if it ends within 10 s (a blocked open
+/// fails the test instead of hanging it).
+fn within_deadline<T: Send + 'static>(work: impl FnOnce() -> T + Send + 'static) -> T {
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || tx.send(work()));
+    rx.recv_timeout(std::time::Duration::from_secs(10))
+        .expect("blocked for 10 s")
+}
+
+/// A FIFO where recording.toml, frames.csv or an image belongs blocked the
+/// open forever (no writer comes); each is refused at once, naming the
+/// file and what it is.
+#[test]
+fn fifos_are_refused_instead_of_blocking() {
+    for file in ["recording.toml", "frames.csv"] {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = base(&tmp);
+        fs::remove_file(dir.join(file)).unwrap();
+        mkfifo(&dir.join(file));
+        let opened = dir.clone();
+        let err = within_deadline(move || Recording::open(&opened).map(drop)).unwrap_err();
+        assert!(matches!(err, RecordingError::Read { .. }), "{err:?}");
+        let text = chain(&err);
+        assert!(
+            text.contains(file) && text.contains("it is a FIFO, not a regular file"),
+            "{text}"
+        );
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = base(&tmp);
+    let recording = Recording::open(&dir).unwrap();
+    let frame = recording.frames()[0].clone();
+    fs::remove_file(dir.join(&frame.depth)).unwrap();
+    mkfifo(&dir.join(&frame.depth));
+    let err = within_deadline(move || recording.read_depth(&frame).map(drop)).unwrap_err();
+    assert!(
+        matches!(err, RecordingError::ImageRead { row: 2, .. }),
+        "{err:?}"
+    );
+    assert!(chain(&err).contains("it is a FIFO"), "{}", chain(&err));
+}
+
+/// A directory where recording.toml or a depth image belongs said "no
+/// recording.toml" and "cannot decode": now what it is.
+#[test]
+fn directories_in_place_of_files_are_named_as_such() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = base(&tmp);
+    fs::remove_file(dir.join("recording.toml")).unwrap();
+    fs::create_dir(dir.join("recording.toml")).unwrap();
+    let err = open_err(&dir);
+    let text = chain(&err);
+    assert!(
+        text.contains("recording.toml: it is a directory, not a regular file"),
+        "{text}"
+    );
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = base(&tmp);
+    let recording = Recording::open(&dir).unwrap();
+    let frame = &recording.frames()[1];
+    fs::remove_file(dir.join(&frame.depth)).unwrap();
+    fs::create_dir(dir.join(&frame.depth)).unwrap();
+    let err = recording.read_depth(frame).unwrap_err();
+    let text = chain(&err);
+    assert!(
+        matches!(err, RecordingError::ImageRead { row: 3, .. })
+            && text.contains("it is a directory, not a regular file"),
+        "{text}"
+    );
+}
+
+/// A frames.csv past the cap is refused by its size, without reading it
+/// whole; bytes that are not UTF-8 in recording.toml are named as such
+/// (they were "out of memory" for /dev/urandom).
+#[test]
+fn oversized_and_non_utf8_files_are_refused_by_what_they_are() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = base(&tmp);
+    let csv = fs::OpenOptions::new()
+        .write(true)
+        .open(dir.join("frames.csv"))
+        .unwrap();
+    // Sparse: no disk space is used.
+    csv.set_len(slope_sensor::input_file::MAX_FRAME_TABLE_BYTES + 1)
+        .unwrap();
+    let text = chain(&open_err(&dir));
+    assert!(text.contains("more than the 268435456 read"), "{text}");
+
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = base(&tmp);
+    let mut toml = fs::read(dir.join("recording.toml")).unwrap();
+    toml.extend_from_slice(b"\n# \xff\xfe\n");
+    fs::write(dir.join("recording.toml"), toml).unwrap();
+    let text = chain(&open_err(&dir));
+    assert!(text.contains("it is not UTF-8 text"), "{text}");
+}

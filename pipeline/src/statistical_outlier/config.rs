@@ -19,6 +19,12 @@ pub struct OutlierConfig {
     /// The statistic of a pixel missing some of its m = 20 grid neighbours
     /// (grid neighbourhood only).
     pub fallback: Fallback,
+    /// `[near, far]`, metres along the optical axis: points outside are no
+    /// reading. Unset: the sensor's range
+    /// ([`crate::sensor_noise::NoiseModel::depth_range_m`] of
+    /// `selection.noise_model`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub depth_range_m: Option<[f64; 2]>,
 }
 
 /// What a pixel missing some of its 20 grid neighbours takes
@@ -44,6 +50,7 @@ impl Default for OutlierConfig {
             std_ratio: 2.0,
             neighbourhood: crate::literal::OutlierNeighbourhood::Grid,
             fallback: Fallback::ExactWindow,
+            depth_range_m: None,
         }
     }
 }
@@ -58,6 +65,15 @@ impl OutlierConfig {
             self.neighbours,
             "must be at most 48 (the 7x7 pixel window)",
         )?;
-        non_negative("std_ratio", self.std_ratio)
+        non_negative("std_ratio", self.std_ratio)?;
+        if let Some([near, far]) = self.depth_range_m {
+            check(
+                near.is_finite() && far.is_finite() && near >= 0.0 && far > near,
+                "depth_range_m",
+                format!("[{near}, {far}]"),
+                "must be [near, far] in metres with 0 <= near < far",
+            )?;
+        }
+        Ok(())
     }
 }

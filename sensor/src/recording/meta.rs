@@ -8,6 +8,7 @@ use slope_ipc_types::{Intrinsics, Mount};
 use toml::{Table, Value};
 
 use super::RecordingError;
+use crate::cloud_checks::{check_intrinsics, check_unit_m};
 
 /// The value of `format` every recording carries.
 pub const FORMAT_NAME: &str = "slope-recording";
@@ -240,7 +241,9 @@ pub(crate) fn parse_meta(text: &str, path: &Path) -> Result<RecordingMeta, Recor
 
 /// Checks the values a reader would reject: zero size, non-positive or
 /// non-finite `unit_m`/`fx`/`fy`, non-finite `cx`/`cy` or mount values, a
-/// truth outside [0, 90] degrees.
+/// truth outside [0, 90] degrees; then the ranges a cloud from IPC is held
+/// to as well (`cloud_checks.rs`: a unit of 1e300 m, a focal length of
+/// 1e-300 px, a principal point far outside the image).
 pub(crate) fn validate_meta(meta: &RecordingMeta, path: &Path) -> Result<(), RecordingError> {
     let keys = Keys { path };
     let d = &meta.depth;
@@ -263,6 +266,9 @@ pub(crate) fn validate_meta(meta: &RecordingMeta, path: &Path) -> Result<(), Rec
             return Err(keys.invalid(key, format!("must be a finite number, found {value}")));
         }
     }
+    check_unit_m(d.unit_m)
+        .and_then(|()| check_intrinsics(&d.intrinsics(), d.width, d.height))
+        .map_err(|o| keys.invalid(&format!("depth.{}", o.key), o.rule))?;
     if let Err((key, _, reason)) = meta.mount.check() {
         return Err(keys.invalid(&format!("mount.{key}"), reason));
     }
@@ -416,7 +422,7 @@ mod tests {
     fn formatted_meta_parses_back_to_the_same_bits() {
         let path = Path::new("recording.toml");
         let mut meta = sample();
-        for tricky in [1e-300, 5e-324, 123456.789e10, 1.0 / 3.0] {
+        for tricky in [1e-300, 5e-324, 1023.9999999999, 1.0 / 3.0] {
             meta.depth.cx = tricky;
             let text = format_meta(&meta).unwrap();
             let back = parse_meta(&text, path).unwrap();
@@ -492,6 +498,31 @@ mod tests {
         let message = err.to_string();
         assert!(message.starts_with("r.toml line 2, column 7"), "{message}");
         assert!(!message.contains('\n'), "{message:?}");
+    }
+
+    /// Finite but absurd values (every frame came out `too_few_points`,
+    /// exit 0, no word why) are refused naming the key and the range.
+    #[test]
+    fn absurd_finite_depth_values_are_refused_by_key() {
+        type Spoil = fn(&mut DepthInfo);
+        let cases: [(Spoil, &str); 5] = [
+            (|d| d.unit_m = 1e300, "depth.unit_m"),
+            (|d| d.unit_m = 1e-300, "depth.unit_m"),
+            (|d| d.cx = 1e300, "depth.cx"),
+            (|d| d.fy = 1e-300, "depth.fy"),
+            (|d| d.cy = -1e6, "depth.cy"),
+        ];
+        for (spoil, expected) in cases {
+            let mut meta = sample();
+            spoil(&mut meta.depth);
+            let err = validate_meta(&meta, Path::new("r.toml")).unwrap_err();
+            assert!(
+                matches!(&err, RecordingError::InvalidKey { key, reason, .. }
+                    if key == expected && reason.contains("must be a number from")),
+                "{expected}: {err}"
+            );
+        }
+        validate_meta(&sample(), Path::new("r.toml")).unwrap();
     }
 
     #[test]

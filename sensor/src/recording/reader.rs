@@ -1,7 +1,6 @@
 //! Reading a recording: `frames.csv` parsing (bytes in, [`FrameEntry`]s out)
 //! and [`Recording`], which decodes the images on demand.
 
-use std::fs::File;
 use std::io::{self, BufReader};
 use std::path::{Component, Path, PathBuf};
 
@@ -10,6 +9,9 @@ use slope_ipc_types::{Intrinsics, Mount};
 
 use super::meta::{check_truth_deg, parse_meta};
 use super::{ColorImage, DepthImage, RecordingError, RecordingMeta, FRAMES_FILE, META_FILE};
+use crate::input_file::{
+    open_regular, read_bytes, read_text, MAX_FRAME_TABLE_BYTES, MAX_SETTINGS_BYTES,
+};
 use crate::projection::Projector;
 
 /// One row of `frames.csv`.
@@ -43,22 +45,21 @@ impl Recording {
     /// and `frames.csv` (not the images).
     pub fn open(dir: &Path) -> Result<Recording, RecordingError> {
         let meta_path = dir.join(META_FILE);
-        if !meta_path.is_file() {
+        if !meta_path.exists() {
             return Err(RecordingError::NotARecording {
                 dir: dir.to_path_buf(),
             });
         }
-        let text = std::fs::read_to_string(&meta_path).map_err(|source| RecordingError::Read {
-            path: meta_path.clone(),
-            source,
-        })?;
+        let read_error = |path: &Path| {
+            let path = path.to_path_buf();
+            move |source| RecordingError::Read { path, source }
+        };
+        let text = read_text(&meta_path, MAX_SETTINGS_BYTES).map_err(read_error(&meta_path))?;
         let meta = parse_meta(&text, &meta_path)?;
 
         let frames_path = dir.join(FRAMES_FILE);
-        let bytes = std::fs::read(&frames_path).map_err(|source| RecordingError::Read {
-            path: frames_path.clone(),
-            source,
-        })?;
+        let bytes =
+            read_bytes(&frames_path, MAX_FRAME_TABLE_BYTES).map_err(read_error(&frames_path))?;
         let frames = parse_frames(&bytes, &frames_path)?;
         tracing::debug!(
             dir = %dir.display(),
@@ -228,6 +229,17 @@ struct Columns {
 impl Columns {
     /// The columns of `header`; a required one missing is an error.
     fn find(header: &csv::StringRecord, path: &Path) -> Result<Self, RecordingError> {
+        for name in ["index", "timestamp_ns", "depth", "color", "slope_deg"] {
+            if header.iter().filter(|h| *h == name).count() > 1 {
+                return Err(RecordingError::BadRow {
+                    path: path.to_path_buf(),
+                    row: 1,
+                    reason: format!(
+                        "the header names the column `{name}` twice (which one holds the frames?)"
+                    ),
+                });
+            }
+        }
         let column = |name: &str| header.iter().position(|h| h == name);
         let required = |name: &'static str| {
             column(name).ok_or(RecordingError::MissingColumn {
@@ -467,7 +479,7 @@ fn decode_png(
     format: PixelFormat,
     mut sink: impl FnMut(&[u8]),
 ) -> Result<(), RecordingError> {
-    let file = File::open(ctx.image).map_err(|e| ctx.read_error(e))?;
+    let file = open_regular(ctx.image).map_err(|e| ctx.read_error(e))?;
     let decoder = png::Decoder::new(BufReader::new(file));
     let mut reader = decoder.read_info().map_err(|e| ctx.decode_error(e))?;
 
@@ -593,6 +605,18 @@ mod tests {
         assert_eq!(frames.len(), 1);
         assert_eq!((frames[0].index, frames[0].timestamp_ns), (7, 5));
         assert_eq!(frames[0].color, None);
+    }
+
+    /// A duplicate `depth` column was read as its first one without a word.
+    #[test]
+    fn a_column_named_twice_is_refused() {
+        let text = "index,timestamp_ns,depth,depth\n0,0,depth/0.png,depth/1.png\n";
+        let err = parse_frames(text.as_bytes(), Path::new("frames.csv")).unwrap_err();
+        assert!(
+            matches!(&err, RecordingError::BadRow { row: 1, reason, .. }
+                if reason.contains("`depth` twice")),
+            "{err}"
+        );
     }
 
     #[test]

@@ -10,6 +10,7 @@ use slope_ipc_types::{ServiceNames, DEFAULT_SERVICE_PREFIX, SERVICE_PREFIX_ENV};
 use crate::config_file::{
     config_path, is_config_error, SlopeFile, DEFAULT_CONFIG_PATH, EXIT_CONFIG,
 };
+use slope_sensor::interruptible::run_interruptible;
 use slope_sensor::publish::{StopFlag, StopRequest, StopSignals};
 use slope_sensor::recording::Recording;
 use tracing_subscriber::EnvFilter;
@@ -160,9 +161,22 @@ pub trait OutputArgs: clap::Parser {
 /// Opens the recording in `path` to read its frames (`slope-eval`,
 /// `slope-convert`, `slope-replay`): refuses a `[depth]` size of more than
 /// `max_points` points (`--max-points`) before any cloud is allocated, and
-/// a recording without frames.
-pub fn open_recording(path: &Path, max_points: usize) -> anyhow::Result<Recording> {
-    let recording = Recording::open(path)?;
+/// a recording without frames. The files are read on a thread of their
+/// own: a stop request ends the wait for an open or a read that blocks (a
+/// stalled network mount) with an error that says so.
+pub fn open_recording(
+    path: &Path,
+    max_points: usize,
+    stop: &StopFlag,
+) -> anyhow::Result<Recording> {
+    let dir = path.to_path_buf();
+    let opened = run_interruptible("open-recording", stop, OPEN_SLICE, &mut || {}, move || {
+        Recording::open(&dir)
+    })?;
+    let Some(recording) = opened else {
+        anyhow::bail!("stopped before its files could be read (a stop request came first)");
+    };
+    let recording = recording?;
     recording
         .check_points(max_points)
         .map_err(|err| anyhow::anyhow!("{err} (--max-points)"))?;
@@ -171,6 +185,9 @@ pub fn open_recording(path: &Path, max_points: usize) -> anyhow::Result<Recordin
     }
     Ok(recording)
 }
+
+/// How often a wait for a blocked open looks at the stop request.
+const OPEN_SLICE: std::time::Duration = std::time::Duration::from_millis(50);
 
 /// What `--max-frames 0` (and `--count 0`) answers, in every program.
 pub const MAX_FRAMES_ZERO: &str = "must be at least 1 (leave the flag out for no limit)";
@@ -205,7 +222,7 @@ pub fn max_prefix_len() -> usize {
 }
 
 /// A service prefix: non-empty, at most [`max_prefix_len`] bytes,
-/// printable, without surrounding slashes.
+/// printable ASCII, without surrounding slashes.
 pub fn prefix_arg(text: &str) -> Result<String, String> {
     if text.is_empty() {
         return Err(format!(
@@ -224,6 +241,14 @@ pub fn prefix_arg(text: &str) -> Result<String, String> {
     if text.starts_with('/') || text.ends_with('/') || text.chars().any(char::is_control) {
         return Err(format!(
             "'{text}' is not a usable service prefix: no leading or trailing '/', no control characters"
+        ));
+    }
+    // iceoryx2 takes ASCII service names only ("InvalidContent" otherwise)
+    // and keeps `iox2://` for its own.
+    if !text.is_ascii() || text.starts_with("iox2://") {
+        return Err(format!(
+            "'{text}' is not a usable service prefix: iceoryx2 service names are ASCII only \
+             (letters, digits, punctuation) and may not start with iox2://"
         ));
     }
     Ok(text.to_string())
@@ -322,6 +347,7 @@ pub fn error_report(err: &anyhow::Error) -> String {
 /// within 50 ms is the same request ([`StopSignals`]: `timeout`
 /// sends two).
 pub fn stop_on_signals() -> anyhow::Result<StopFlag> {
+    write_errors_instead_of_sigxfsz()?;
     let stop = StopFlag::new();
     let handler_flag = stop.clone();
     let mut signals = StopSignals::new();
@@ -337,6 +363,19 @@ pub fn stop_on_signals() -> anyhow::Result<StopFlag> {
     })
     .map_err(|e| anyhow::anyhow!("failed to install the SIGINT/SIGTERM handler: {e}"))?;
     Ok(stop)
+}
+
+/// Blocks SIGXFSZ in this thread and every thread it starts from now on
+/// (call it before any): a write past the file-size limit (`ulimit -f`)
+/// then fails with EFBIG ("File too large"), which the program reports and
+/// cleans up after (no `.part` left, an MCAP file's frames said), instead
+/// of the signal killing it without a word (exit 153). The signal stays
+/// pending, never delivered.
+pub fn write_errors_instead_of_sigxfsz() -> anyhow::Result<()> {
+    use nix::sys::signal::{SigSet, Signal};
+    SigSet::from(Signal::SIGXFSZ)
+        .thread_block()
+        .map_err(|e| anyhow::anyhow!("cannot block SIGXFSZ: {e}"))
 }
 
 /// A node name for this process: `<program>-<pid>`.
@@ -429,6 +468,30 @@ mod tests {
         CommonArgs {
             service_prefix: prefix.map(str::to_string),
             log: LogArgs::default(),
+        }
+    }
+
+    /// Every prefix the parser takes makes service names iceoryx2 takes
+    /// (each printable ASCII character tried), and a non-ASCII one, which
+    /// iceoryx2 refuses ("InvalidContent"), is refused by the parser and
+    /// by the config file (`--print-config` passed it).
+    #[test]
+    fn a_prefix_is_ascii_as_iceoryx2_service_names_are() {
+        use iceoryx2::prelude::ServiceName;
+        for c in (0x20u8..0x7f).map(char::from).filter(|&c| c != '/') {
+            let prefix = format!("p{c}q");
+            let names = ServiceNames::new(prefix_arg(&prefix).expect("printable ASCII"));
+            for name in [names.cloud(), names.estimate(), names.health()] {
+                assert!(ServiceName::new(&name).is_ok(), "{name:?}");
+            }
+        }
+        for prefix in ["probe\u{e9}", "robot\u{2764}", "iox2://x"] {
+            let names = ServiceNames::new(prefix.to_string());
+            assert!(ServiceName::new(&names.cloud()).is_err(), "{prefix}");
+            let err = prefix_arg(prefix).expect_err("not for iceoryx2");
+            assert!(err.contains("ASCII only"), "{err}");
+            let file = SlopeFile::from_toml_str(&format!("service_prefix = {prefix:?}\n"));
+            assert!(file.is_err(), "{prefix}");
         }
     }
 

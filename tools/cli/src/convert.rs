@@ -147,7 +147,7 @@ pub struct ConvertStats {
 /// set, the run ends after the frame under way and finishes the file with
 /// the frames converted so far.
 pub fn run(args: &ConvertArgs, stop: &StopFlag) -> anyhow::Result<ConvertStats> {
-    let recording = open_recording(&args.recording, args.max_points)
+    let recording = open_recording(&args.recording, args.max_points, stop)
         .with_context(|| format!("cannot convert {}", args.recording.display()))?;
     let config =
         load_config(args.config.as_ref(), args.method)?.for_sensor(&recording.meta().sensor);

@@ -12,10 +12,12 @@ use std::time::{Duration, Instant};
 use anyhow::Context;
 use clap::Parser;
 use slope_ipc_types::{
-    CloudHeader, HealthComponent, ServiceNames, SlopeEstimate, SlopeMethod, SENSOR_NAME_LEN,
+    CloudHeader, HealthComponent, ServiceNames, SlopeEstimate, SlopeMethod,
+    DEFAULT_MAX_CLOUD_POINTS, SENSOR_NAME_LEN,
 };
 use slope_pipeline::tracking::StreamPosition;
 use slope_pipeline::{parse_method, CloudView, Estimator, EstimatorConfig, FrameInfo};
+use slope_sensor::cloud_checks::check_cloud;
 use slope_sensor::ipc::{
     create_node, CloudSubscriber, EstimatePublisher, HealthPublisher, SurfacesPublisher,
 };
@@ -24,6 +26,7 @@ use slope_sensor::publish::StopFlag;
 use crate::cli::{max_frames_arg, node_name, wait_loop, CommonArgs, SilenceNote};
 use crate::config_file::{check_health_interval, config_path, SlopeFile, DEFAULT_CONFIG_PATH};
 use crate::health::HealthReporter;
+use crate::rejected_clouds::RejectedClouds;
 use crate::service_manager::ServiceManager;
 
 #[derive(Debug, Parser)]
@@ -88,6 +91,11 @@ pub struct EstimatorArgs {
     /// plane's normals run at once; the estimate is the same.
     #[arg(long, value_parser = threads_arg)]
     pub threads: Option<usize>,
+    /// Largest cloud (width x height) to estimate: a larger one is refused
+    /// (health counts it, the estimate says bad_frame) before the estimator
+    /// touches it.
+    #[arg(long, default_value_t = DEFAULT_MAX_CLOUD_POINTS)]
+    pub max_points: usize,
 
     #[command(flatten)]
     pub common: CommonArgs,
@@ -215,6 +223,7 @@ fn estimate(
         surfaces: &surfaces,
     };
     let mut worker = Worker::new(config, &subscriber, outputs, args.max_frames, health);
+    worker.max_points = args.max_points;
     serve(&mut worker, stop, manager)?;
     tracing::info!(
         processed = worker.stats.processed,
@@ -365,6 +374,10 @@ struct Worker<'a> {
     max_frames: Option<u64>,
     health: HealthReporter,
     status: StatusRate,
+    /// `--max-points`.
+    max_points: usize,
+    /// Clouds refused by the input checks.
+    rejected: RejectedClouds,
 }
 
 /// Where a worker publishes each frame: the estimate and its surfaces.
@@ -396,6 +409,8 @@ impl<'a> Worker<'a> {
             max_frames,
             health,
             status: StatusRate::new(Instant::now()),
+            max_points: DEFAULT_MAX_CLOUD_POINTS,
+            rejected: RejectedClouds::default(),
         }
     }
 }
@@ -434,6 +449,47 @@ impl Worker<'_> {
         self.last_frame = None;
     }
 
+    /// A cloud the input checks refuse: counted in health (an error, its
+    /// reason the last error), logged at WARN (rate limited), answered with
+    /// a `bad_frame` estimate. Its index carries the stream on, so the next
+    /// good cloud does not count it as dropped.
+    fn refuse(
+        &mut self,
+        header: &CloudHeader,
+        skipped: u64,
+        err: &slope_sensor::cloud_checks::CloudCheckError,
+    ) -> anyhow::Result<()> {
+        if let Some(line) = self
+            .rejected
+            .refused(header.frame_index, err, Instant::now())
+        {
+            tracing::warn!("{line}");
+        }
+        self.health
+            .monitor
+            .error(&format!("refused cloud {}: {err}", header.frame_index));
+        self.stats.dropped = self.stats.dropped.saturating_add(skipped);
+        self.health.monitor.frames_in(skipped.saturating_add(1));
+        self.health.monitor.dropped(skipped);
+        if let Some(last) = self.last_frame.as_mut() {
+            if header.frame_index > last.index && header.capture_stamp_ns >= last.stamp_ns {
+                (last.index, last.stamp_ns) = (header.frame_index, header.capture_stamp_ns);
+            }
+        }
+        let message = SlopeEstimate {
+            frame_index: header.frame_index,
+            capture_stamp_ns: header.capture_stamp_ns,
+            source_stamp_ns: header.source_stamp_ns,
+            dropped_frames: self.stats.dropped,
+            method: self.config.method as u32,
+            ..SlopeEstimate::default()
+        };
+        self.publisher.estimates.publish(&message)?;
+        self.stats.processed += 1;
+        self.health.monitor.frame_out(None, &[]);
+        Ok(())
+    }
+
     fn on_cloud_event(&mut self) -> anyhow::Result<()> {
         let (sample, skipped) = self.subscriber.receive_newest()?;
         let Some(sample) = sample else {
@@ -441,6 +497,10 @@ impl Worker<'_> {
         };
         let header = *sample.header();
         let points = sample.points();
+        if let Err(err) = check_cloud(&header, points.len(), self.max_points) {
+            drop(sample);
+            return self.refuse(&header, skipped, &err);
+        }
         if header.sensor != self.sensor {
             self.use_sensor(&header);
         }
@@ -617,15 +677,18 @@ mod tests {
         assert_eq!(gap(at(11, 1033)), 0);
         assert_eq!(gap(at(14, 1133)), 3);
         assert_eq!(gap(at(50, 2400)), 39);
+        // A burst (200 clouds in 120 ms, of which this estimator saw 8):
+        // the 24 skipped in 15 ms are dropped, not a new stream.
+        assert_eq!(gap(at(35, 1015)), 24);
         // A new stream: the index starts again, comes after a pause, the
-        // clock went back, or the index jumps further than 1 kHz allows.
+        // clock went back, or the index jumps further than 100 kHz allows.
         for next in [
             at(0, 1033),
             at(10, 1033),
             at(50, 2501),
             at(50, 999),
             at(u64::MAX, 1033),
-            at(45, 1033),
+            at(10_000, 1033),
         ] {
             assert_eq!(gap(next), 0, "{next:?}");
         }

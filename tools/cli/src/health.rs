@@ -279,9 +279,26 @@ pub fn summary_line(h: &Health) -> String {
         line.push_str(&format!(" ({})", parts.join(", ")));
     }
     if h.errors > 0 {
-        line.push_str(&format!("; {} errors, last: {}", h.errors, h.last_error()));
+        let last = printable(h.last_error());
+        line.push_str(&format!("; {} errors, last: {last}", h.errors));
     }
     line
+}
+
+/// `text` with its control characters (an escape sequence that would clear
+/// a terminal, a newline that would start a line of its own) written as
+/// Rust escapes (`\u{1b}`, `\n`): the report comes from another process,
+/// and the readable form is printed to a terminal.
+pub fn printable(text: &str) -> String {
+    text.chars()
+        .map(|c| {
+            if c.is_control() {
+                c.escape_default().to_string()
+            } else {
+                c.to_string()
+            }
+        })
+        .collect()
 }
 
 /// `median/p95/max`, one decimal.
@@ -292,6 +309,20 @@ fn timing_text(t: &TimingStats) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A last error with an escape sequence (it cleared the terminal of
+    /// `slope-echo --health`) and a newline is printed escaped, on one line.
+    #[test]
+    fn control_characters_of_a_last_error_are_escaped() {
+        let mut m = HealthMonitor::new(HealthComponent::Estimator);
+        m.error("bad \u{1b}[2J\u{1b}[Hcloud\nsecond line \u{e9}");
+        let line = summary_line(&m.report());
+        assert!(
+            line.ends_with("1 errors, last: bad \\u{1b}[2J\\u{1b}[Hcloud\\nsecond line \u{e9}"),
+            "{line}"
+        );
+        assert!(!line.chars().any(char::is_control), "{line:?}");
+    }
 
     #[test]
     fn a_report_holds_the_window_and_the_totals() {

@@ -24,6 +24,7 @@ pub mod overlay_marks;
 pub mod plot;
 pub mod ply;
 pub mod record;
+pub mod rejected_clouds;
 pub mod render;
 pub mod replay;
 pub mod ros2_messages;

@@ -204,6 +204,15 @@ pub struct McapExporter {
     pending: Option<Replacement>,
 }
 
+/// Why `dir`, which an output file should go into, cannot take it: it is
+/// something else than a directory, or there is nothing there.
+pub fn not_a_directory(dir: &Path) -> String {
+    match std::fs::metadata(dir) {
+        Ok(_) => format!("{} is not a directory (a file is there)", dir.display()),
+        Err(_) => format!("the directory {} does not exist", dir.display()),
+    }
+}
+
 /// A temporary file that becomes `path` once finished; registered so that
 /// a second signal removes it ([`crate::unfinished_files`]).
 struct Replacement {
@@ -249,10 +258,7 @@ impl McapExporter {
             );
         }
         if !dir.is_dir() {
-            anyhow::bail!(
-                "cannot write {name}: the directory {} does not exist",
-                dir.display()
-            );
+            anyhow::bail!("cannot write {name}: {}", not_a_directory(dir));
         }
         let prefix = format!(
             ".{}.",

@@ -139,7 +139,7 @@ pub fn positive_f64(text: &str) -> Result<f64, String> {
 }
 
 pub fn run(args: &ReplayArgs, stop: &StopFlag) -> anyhow::Result<PublishStats> {
-    let recording = open_recording(&args.recording, args.max_points)
+    let recording = open_recording(&args.recording, args.max_points, stop)
         .with_context(|| format!("cannot replay {}", args.recording.display()))?;
     let frames = recording.frames().len();
     check_carried_sensor_name(&recording.meta().sensor).with_context(|| {

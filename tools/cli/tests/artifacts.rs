@@ -328,6 +328,15 @@ fn an_output_that_cannot_be_written_is_refused_up_front() {
     );
     let entries = std::fs::read_dir(dir.path()).expect("dir").count();
     assert_eq!(entries, 0, "no temporary file left");
+    // Under a regular file: said to be one, not "does not exist".
+    let file = dir.path().join("FILE");
+    std::fs::write(&file, b"x").expect("file");
+    let (code, stderr) = convert(&[rec, "-o", file.join("out.mcap").to_str().expect("utf-8")]);
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(
+        stderr.contains("FILE is not a directory (a file is there)"),
+        "{stderr}"
+    );
 }
 
 /// A colour image that cannot be read is a warning: the frame is still

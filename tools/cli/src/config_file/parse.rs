@@ -5,6 +5,8 @@
 
 use std::path::Path;
 
+use slope_sensor::input_file::{read_text, MAX_SETTINGS_BYTES};
+
 use super::error::ConfigFileError;
 use super::locate::{first_line_of, key_path, line_of};
 use super::sections::SlopeFile;
@@ -37,12 +39,14 @@ impl SlopeFile {
         Ok(file)
     }
 
-    /// Reads `path`, or the defaults when `path` is `None`.
+    /// Reads `path`, or the defaults when `path` is `None`. Only a regular
+    /// file of UTF-8 text, at most [`MAX_SETTINGS_BYTES`] long, is read (a
+    /// FIFO would block, `/dev/zero` never end).
     pub fn load(path: Option<&Path>) -> Result<Self, ConfigFileError> {
         let Some(path) = path else {
             return Ok(Self::default());
         };
-        let text = std::fs::read_to_string(path).map_err(|source| ConfigFileError::Read {
+        let text = read_text(path, MAX_SETTINGS_BYTES).map_err(|source| ConfigFileError::Read {
             path: path.to_path_buf(),
             source,
         })?;

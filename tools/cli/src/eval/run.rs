@@ -61,7 +61,7 @@ pub fn run(args: &EvalArgs, stop: &StopFlag) -> anyhow::Result<EvalOutcome> {
         every: args.render_every,
     };
     let mut outcome = EvalOutcome::default();
-    let opened = open_recordings(args, &mut outcome.failures)?;
+    let opened = open_recordings(args, stop, &mut outcome.failures)?;
     // Output directories only once something will be written into them.
     if !opened.is_empty() {
         artifacts.prepare()?;
@@ -119,6 +119,7 @@ pub fn run(args: &EvalArgs, stop: &StopFlag) -> anyhow::Result<EvalOutcome> {
 /// directory, is an error.
 fn open_recordings<'a>(
     args: &'a EvalArgs,
+    stop: &StopFlag,
     failures: &mut Vec<String>,
 ) -> anyhow::Result<Vec<(&'a PathBuf, Recording)>> {
     let mut opened = Vec::new();
@@ -131,7 +132,7 @@ fn open_recordings<'a>(
             files.push(path.display().to_string());
             continue;
         }
-        match open_recording(path, args.max_points) {
+        match open_recording(path, args.max_points, stop) {
             Ok(recording) => opened.push((path, recording)),
             Err(err) => {
                 let message = format!("cannot evaluate {}: {err:#}", path.display());

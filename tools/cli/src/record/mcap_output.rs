@@ -10,8 +10,8 @@ use slope_sensor::publish::StopFlag;
 use super::args::{RecordArgs, RecordLimits, RecordSource};
 use super::output::check_parent;
 use super::topic::record_topic;
+use super::writer_thread::SinkThread;
 use super::RecordStats;
-use crate::export_format::FrameExporter;
 
 /// `--format mcap`: the cloud topic (and the estimates) into an MCAP file.
 pub(super) fn record_mcap(
@@ -46,14 +46,16 @@ pub(super) fn record_mcap(
     Ok(stats)
 }
 
-/// Writes the estimates received so far into `mcap`; returns how many.
+/// Queues the estimates received so far for `writer`; returns how many.
 pub(super) fn write_estimates(
     estimates: &EstimateSubscriber,
-    mcap: &mut FrameExporter,
+    writer: &SinkThread,
 ) -> anyhow::Result<u64> {
     let mut written = 0;
     while let Some(estimate) = estimates.receive()? {
-        mcap.write_estimate(&estimate)?;
+        if !writer.write_estimate(estimate) {
+            anyhow::bail!("the recorder's writer stopped");
+        }
         written += 1;
     }
     Ok(written)
@@ -63,13 +65,13 @@ pub(super) fn write_estimates(
 /// written, for up to 300 ms (less when `stop` is set); returns how many.
 pub(super) fn settle_estimates(
     estimates: &EstimateSubscriber,
-    mcap: &mut FrameExporter,
+    writer: &SinkThread,
     stop: &StopFlag,
 ) -> anyhow::Result<u64> {
     let mut written = 0;
     let settle = Instant::now() + Duration::from_millis(300);
     while Instant::now() < settle && !stop.is_stopped() {
-        written += write_estimates(estimates, mcap)?;
+        written += write_estimates(estimates, writer)?;
         estimates.listener().wait(Duration::from_millis(50))?;
     }
     Ok(written)

@@ -22,6 +22,7 @@
 //! | `topic.rs` | the recording loop of the cloud topic |
 //! | `sink.rs` | where the topic's frames go: a recording directory or an MCAP file |
 //! | `mcap_output.rs` | `--format mcap`: its checks and the estimates it writes |
+//! | `writer_thread.rs` | the sink on a thread of its own, so that encoding never delays receiving |
 //! | `tests.rs` | the unit tests |
 
 mod args;
@@ -35,6 +36,7 @@ mod source;
 mod tests;
 mod timeline;
 mod topic;
+mod writer_thread;
 
 pub use args::{
     Compression, PipelineArg, RecordArgs, RecordFormat, RecordLimits, RecordSource, OUTPUT_MISSING,

@@ -20,7 +20,13 @@ pub fn prepare_out_dir(dir: &Path) -> anyhow::Result<bool> {
             }
             Ok(false)
         }
-        Err(err) if err.kind() == std::io::ErrorKind::NotFound => {
+        // Nothing there, or a parent that is a file (said so by check_parent).
+        Err(err)
+            if matches!(
+                err.kind(),
+                std::io::ErrorKind::NotFound | std::io::ErrorKind::NotADirectory
+            ) =>
+        {
             check_parent(dir, "the output directory ")?;
             std::fs::create_dir(dir)
                 .with_context(|| format!("cannot create the output directory {}", dir.display()))?;
@@ -39,10 +45,11 @@ pub fn prepare_out_dir(dir: &Path) -> anyhow::Result<bool> {
 /// not exist: a typing error in a parent is said, not created.
 pub(super) fn check_parent(path: &Path, what: &str) -> anyhow::Result<()> {
     let parent = path.parent().filter(|p| !p.as_os_str().is_empty());
-    if parent.is_some_and(|p| !p.is_dir()) {
+    if let Some(parent) = parent.filter(|p| !p.is_dir()) {
         anyhow::bail!(
-            "cannot create {what}{}: its directory does not exist",
-            path.display()
+            "cannot create {what}{}: {}",
+            path.display(),
+            crate::mcap_export::not_a_directory(parent)
         );
     }
     Ok(())

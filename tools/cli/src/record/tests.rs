@@ -159,10 +159,19 @@ fn the_output_directory_is_checked_before_waiting() {
     // A missing parent (a typing error) is refused, and nothing made.
     let message = prepare_out_dir(&fresh).expect_err("no a/").to_string();
     assert!(
-        message.contains("its directory does not exist"),
+        message.contains("the directory") && message.contains("does not exist"),
         "{message}"
     );
     assert!(!tmp.path().join("a").exists());
+    // A parent that is a file is said to be one ("does not exist" misled).
+    std::fs::write(tmp.path().join("file"), b"x").expect("file");
+    let message = prepare_out_dir(&tmp.path().join("file/rec"))
+        .expect_err("under a file")
+        .to_string();
+    assert!(
+        message.contains("file is not a directory (a file is there)"),
+        "{message}"
+    );
     std::fs::create_dir(tmp.path().join("a")).expect("mkdir a");
     assert!(prepare_out_dir(&fresh).expect("created"));
     assert!(fresh.is_dir());

@@ -15,6 +15,7 @@ use super::args::{RecordArgs, RecordFormat, RecordLimits};
 use super::images::{cloud_to_images, sensor_of, TOPIC_DEPTH_UNIT_M};
 use super::mcap_output::{settle_estimates, write_estimates};
 use super::sink::Sink;
+use super::writer_thread::{QueuedFrame, SinkThread, Written};
 use super::RecordStats;
 use crate::cli::node_name;
 
@@ -27,7 +28,7 @@ pub fn record_topic(
     let names = args.common.service_names()?;
     let node = create_node(&node_name("slope-record"))?;
     let subscriber =
-        CloudSubscriber::create(&node, &names).context("cannot subscribe to clouds")?;
+        CloudSubscriber::create_deep(&node, &names).context("cannot subscribe to clouds")?;
     let estimates = match args.format() {
         RecordFormat::Mcap | RecordFormat::Rosbag2 => Some(
             EstimateSubscriber::create(&node, &names).context("cannot subscribe to estimates")?,
@@ -47,9 +48,13 @@ pub fn record_topic(
             break;
         }
         subscriber.listener().wait(slice)?;
-        recorder.write_estimates(estimates.as_ref())?;
-        if recorder.receive_clouds(&subscriber)? {
-            break;
+        let received = recorder
+            .write_estimates(estimates.as_ref())
+            .and_then(|()| recorder.receive_clouds(&subscriber));
+        match received {
+            Ok(true) => break,
+            Ok(false) => {}
+            Err(err) => return Err(recorder.fail(err)),
         }
     }
     recorder.finish(estimates.as_ref(), stop)
@@ -62,7 +67,7 @@ struct TopicRecorder<'a> {
     args: &'a RecordArgs,
     limits: &'a RecordLimits,
     stats: RecordStats,
-    writer: Option<(Sink, CloudHeader)>,
+    writer: Option<(SinkThread, CloudHeader)>,
     depth: DepthImage,
     color: Option<ColorImage>,
     last_index: Option<u64>,
@@ -123,8 +128,8 @@ impl<'a> TopicRecorder<'a> {
     /// Estimates (MCAP only) once the file exists; earlier ones belong to
     /// clouds that were not recorded.
     fn write_estimates(&mut self, estimates: Option<&EstimateSubscriber>) -> anyhow::Result<()> {
-        if let (Some(estimates), Some((Sink::Mcap(mcap), _))) = (estimates, &mut self.writer) {
-            self.stats.estimates += write_estimates(estimates, mcap)?;
+        if let (Some(estimates), Some((writer, _))) = (estimates, &self.writer) {
+            self.stats.estimates += write_estimates(estimates, writer)?;
         }
         Ok(())
     }
@@ -156,13 +161,14 @@ impl<'a> TopicRecorder<'a> {
             );
             return Ok(false);
         }
-        let (sink, first) = match &mut self.writer {
-            Some((sink, first)) => (sink, *first),
+        let (writer, first) = match &mut self.writer {
+            Some((writer, first)) => (writer, *first),
             None => {
                 let sink = open_sink(self.args, header)?;
+                let writer = SinkThread::spawn(sink, self.args.out_dir().to_path_buf())?;
                 self.first_at = Some(Instant::now());
-                let (sink, first) = self.writer.insert((sink, *header));
-                (sink, *first)
+                let (writer, first) = self.writer.insert((writer, *header));
+                (writer, *first)
             }
         };
         if !same_layout(header, &first) {
@@ -181,15 +187,19 @@ impl<'a> TopicRecorder<'a> {
             &mut self.depth,
             &mut self.color,
         );
-        let out = self.args.out_dir();
-        sink.write(
-            header,
-            points,
-            &self.depth,
-            self.color.as_ref(),
-            self.stats.written,
-            out,
-        )?;
+        let frame = QueuedFrame {
+            header: *header,
+            points: match self.args.format() {
+                RecordFormat::Mcap => points.to_vec(),
+                // A ROS 2 bag holds the depth image, not the cloud.
+                RecordFormat::Recording | RecordFormat::Rosbag2 => Vec::new(),
+            },
+            depth: self.depth.clone(),
+            color: self.color.clone(),
+        };
+        if !writer.write(frame) {
+            anyhow::bail!("the recorder's writer stopped");
+        }
         self.stats.written += 1;
         Ok(self
             .limits
@@ -213,23 +223,80 @@ impl<'a> TopicRecorder<'a> {
         self.last_index = Some(header.frame_index);
     }
 
-    /// Writes the last estimates (MCAP) and finishes the sink, if a cloud
-    /// opened one.
+    /// The error of a write that failed (a full disk, the file-size limit),
+    /// saying what the output holds: see [`explain_written`].
+    fn fail(self, err: anyhow::Error) -> anyhow::Error {
+        match self.writer {
+            None => err,
+            Some((writer, _)) => match writer.join() {
+                Ok(written) => explain_written(self.args, err, written),
+                Err(join) => join.context(err.to_string()),
+            },
+        }
+    }
+
+    /// Writes the last estimates (MCAP), waits for the writer and finishes
+    /// the sink, if a cloud opened one.
     fn finish(
         mut self,
         estimates: Option<&EstimateSubscriber>,
         stop: &StopFlag,
     ) -> anyhow::Result<RecordStats> {
-        match self.writer {
-            Some((mut sink, _)) => {
-                if let (Some(estimates), Sink::Mcap(mcap)) = (estimates, &mut sink) {
-                    self.stats.estimates += settle_estimates(estimates, mcap, stop)?;
-                }
-                sink.finish(self.args.out_dir())?;
+        let Some((writer, _)) = &self.writer else {
+            tracing::warn!("no cloud arrived; nothing was recorded");
+            return Ok(self.stats);
+        };
+        if let Some(estimates) = estimates {
+            match settle_estimates(estimates, writer, stop) {
+                Ok(settled) => self.stats.estimates += settled,
+                Err(err) => return Err(self.fail(err)),
             }
-            None => tracing::warn!("no cloud arrived; nothing was recorded"),
         }
+        let args = self.args;
+        let Some((writer, _)) = self.writer.take() else {
+            return Ok(self.stats);
+        };
+        let written = writer.join()?;
+        if written.result.is_err() {
+            return Err(explain_written(
+                args,
+                anyhow::anyhow!("the recorder's writer failed"),
+                written,
+            ));
+        }
+        written.sink.finish(args.out_dir())?;
         Ok(self.stats)
+    }
+}
+
+/// A failed recording's error: the writer's own (when it failed) saying
+/// what an MCAP file holds: its summary and footer are written if they
+/// still fit (a finished file of the frames before), else the file is an
+/// unfinished one. A recording directory is explained by the caller
+/// (`failure.rs`).
+fn explain_written(args: &RecordArgs, err: anyhow::Error, written: Written) -> anyhow::Error {
+    let Written {
+        sink,
+        frames,
+        result,
+    } = written;
+    let err = match result {
+        Err(writing) => writing,
+        Ok(()) => err,
+    };
+    let Sink::Mcap(mcap) = sink else {
+        return err;
+    };
+    let out = args.out_dir().display();
+    match mcap.finish() {
+        Ok(()) => err.context(format!(
+            "{out} holds the {frames} frame(s) recorded before, a finished MCAP file"
+        )),
+        Err(finish) => err.context(format!(
+            "{out} holds the {frames} frame(s) recorded before, unfinished: no MCAP summary \
+             or footer ({finish:#}); a reader that recovers unfinished files (mcap recover) \
+             reads them"
+        )),
     }
 }
 
