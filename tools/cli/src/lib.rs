@@ -24,5 +24,6 @@ pub mod record;
 pub mod render;
 pub mod replay;
 pub mod service_manager;
+pub mod surfaces_json;
 pub mod text;
 pub mod unfinished_files;
