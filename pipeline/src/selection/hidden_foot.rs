@@ -20,13 +20,15 @@
 
 use nalgebra::Vector3;
 
-use super::{plane_axes, GroundFrame, Surface, EXTENT_SAMPLES};
+use super::{plane_axes, GroundFrame, Surface};
 use crate::cloud::CloudView;
 
 /// Strips across the surface whose lowest inliers are marched from.
 pub const FOOT_BINS: usize = 5;
 /// Points placed on the continuation of each strip's foot.
 pub const MARCH_STEPS: usize = 8;
+/// The lowest inliers are looked for among at most about this many.
+pub const FOOT_SAMPLES: usize = 512;
 /// Hidden points needed to call a foot hidden.
 pub const MIN_HIDDEN: usize = 3;
 /// The continuation is followed at most this far down the fall line,
@@ -124,7 +126,7 @@ fn pixel_of(cloud: &CloudView<'_>, q: &Vector3<f64>) -> Option<usize> {
         .then(|| v as usize * cloud.width + u as usize)
 }
 
-/// The lowest inlier (a sample of at most [`EXTENT_SAMPLES`]) in each of
+/// The lowest inlier (a sample of at most [`FOOT_SAMPLES`]) in each of
 /// [`FOOT_BINS`] equal strips along the surface's level direction.
 fn lowest_per_strip(
     cloud: &CloudView<'_>,
@@ -132,7 +134,7 @@ fn lowest_per_strip(
     frame: &GroundFrame,
     level: &Vector3<f64>,
 ) -> [Option<Vector3<f64>>; FOOT_BINS] {
-    let stride = inliers.len().div_ceil(EXTENT_SAMPLES).max(1);
+    let stride = inliers.len().div_ceil(FOOT_SAMPLES).max(1);
     let points = || {
         inliers
             .iter()

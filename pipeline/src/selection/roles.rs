@@ -25,6 +25,8 @@
 //! 5. An inclined surface that meets nothing but whose foot is hidden
 //!    behind something nearer (`hidden_foot.rs`) is a `ramp` or `wall`
 //!    whose support is `hidden`: it may stand on the ground out of sight.
+//!    Only surfaces that could be the road (flat at the noise level and
+//!    large enough) are looked at.
 //! 6. **`elevated`**: everything else: a surface that joins neither the
 //!    ground nor a step (a table, a bed, a shelf, a board): never the road.
 //!
@@ -62,7 +64,10 @@ pub fn assign_roles(
         if s.role != SurfaceRole::Elevated || s.support != SurfaceSupport::None {
             continue;
         }
+        // Only a surface that could be the road (flat and large enough)
+        // is worth the look.
         if kind(s) == Kind::Inclined
+            && s.measurable
             && foot_is_hidden(
                 cloud,
                 &planes[s.plane_index].inliers,

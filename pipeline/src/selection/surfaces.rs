@@ -9,11 +9,10 @@
 //! its inliers, and how much of it lies in the robot's corridor. Roles come
 //! after (`roles.rs`), the road last (`road.rs`).
 //!
-//! Planes of more than [`EXTENT_SAMPLES`] inliers are walked on an evenly
-//! spaced sample of them (every k-th in pixel order: every row of the
-//! plane keeps samples, so its extremes are off by at most k pixels along a
-//! row, a few centimetres on the ground's edges); a ramp or a riser of a
-//! few thousand pixels is walked whole.
+//! Planes of more than [`EXTENT_SAMPLES`] (2048) inliers are walked on an
+//! evenly spaced sample of them (every k-th in pixel order: every row of
+//! the plane keeps samples, at a phase that shifts from row to row, so an
+//! extreme is off by at most k pixels along a row and usually by one).
 
 use nalgebra::Vector3;
 use slope_ipc_types::{SurfaceRole, SurfaceSupport};
@@ -25,7 +24,7 @@ use crate::plane_fit::Plane;
 use crate::ransac_planes::SegmentedPlane;
 
 /// A plane's extremes are taken over at most about this many inliers.
-pub const EXTENT_SAMPLES: usize = 8192;
+pub const EXTENT_SAMPLES: usize = 2048;
 
 /// A surface reaches into the corridor with at least this many inliers
 /// there (a plane's stray edge pixel does not).
@@ -149,17 +148,16 @@ fn describe(
     road: &RoadConfig,
 ) -> Surface {
     let (level, fall) = plane_axes(plane, frame);
-    let mut walk = Extents::new(road);
+    let mut walk = Extents::new(frame, &level, &fall, road);
     let total: usize = lists.iter().map(|l| l.len()).sum();
     let stride = total.div_ceil(EXTENT_SAMPLES).max(1);
     for list in lists {
-        for &pixel in list.iter().step_by(stride) {
-            if let Some(p) = cloud.point(pixel as usize) {
-                walk.add(&p, frame, &level, &fall);
-            }
-        }
+        walk.add_all(cloud, list, stride);
     }
     let tilt = frame.tilt_deg(&plane.normal);
+    let range = |k: usize| (finite_or_nan(walk.min[k]), finite_or_nan(walk.max[k]));
+    let ((near, far), (left, right), (lowest, highest)) =
+        (range(AHEAD), range(LATERAL), range(HEIGHT));
     Surface {
         plane_index: 0,
         segments: 1,
@@ -173,16 +171,16 @@ fn describe(
         inliers: total,
         slope_deg: super::slope_sign(&plane.normal, &frame.forward) * tilt,
         heading_deg: frame.heading_deg(&plane.normal),
-        distance_m: finite_or_nan(walk.ahead.0),
-        far_m: finite_or_nan(walk.ahead.1),
-        left_m: finite_or_nan(walk.lateral.0),
-        right_m: finite_or_nan(walk.lateral.1),
-        lowest_m: finite_or_nan(walk.height.0),
-        highest_m: finite_or_nan(walk.height.1),
+        distance_m: near,
+        far_m: far,
+        left_m: left,
+        right_m: right,
+        lowest_m: lowest,
+        highest_m: highest,
         area_m2: f64::NAN,
         rms_m: f64::NAN,
         noise_ratio: f64::NAN,
-        corridor_distance_m: finite_or_nan(walk.corridor_ahead),
+        corridor_distance_m: finite_or_nan(f64::from(walk.corridor_ahead)),
         corridor_mean_m: walk.corridor_sum / walk.corridor_pixels as f64,
         outline: walk.outline(plane, &level, &fall),
     }
@@ -208,56 +206,88 @@ pub fn plane_axes(plane: &Plane, frame: &GroundFrame) -> (Vector3<f64>, Vector3<
     (level, fall)
 }
 
-/// Running extremes of a surface's inliers.
+/// The coordinates [`Extents`] follows: ahead, lateral, height, along the
+/// plane's level line, up its fall line.
+const AHEAD: usize = 0;
+const LATERAL: usize = 1;
+const HEIGHT: usize = 2;
+const ALONG: usize = 3;
+const UP_FALL: usize = 4;
+
+/// Running extremes of a surface's inliers, in `f32` (a point's
+/// coordinates are `f32`; centimetres matter here, not micrometres).
 struct Extents {
-    half_width_m: f64,
-    look_ahead_m: f64,
-    ahead: (f64, f64),
-    lateral: (f64, f64),
-    height: (f64, f64),
-    along: (f64, f64),
-    up_fall: (f64, f64),
+    /// Each coordinate is `axes[k] . p + offsets[k]`.
+    axes: [[f32; 3]; 5],
+    offsets: [f32; 5],
+    min: [f64; 5],
+    max: [f64; 5],
+    half_width_m: f32,
+    look_ahead_m: f32,
     corridor_pixels: usize,
-    corridor_ahead: f64,
+    corridor_ahead: f32,
     corridor_sum: f64,
 }
 
 impl Extents {
-    fn new(road: &RoadConfig) -> Self {
-        let empty = (f64::INFINITY, f64::NEG_INFINITY);
+    fn new(
+        frame: &GroundFrame,
+        level: &Vector3<f64>,
+        fall: &Vector3<f64>,
+        road: &RoadConfig,
+    ) -> Self {
+        let axis = |v: &Vector3<f64>| [v.x as f32, v.y as f32, v.z as f32];
         Self {
-            half_width_m: road.corridor_half_width_m,
-            look_ahead_m: road.look_ahead_m,
-            ahead: empty,
-            lateral: empty,
-            height: empty,
-            along: empty,
-            up_fall: empty,
+            axes: [
+                axis(&frame.forward),
+                axis(&frame.right),
+                axis(&frame.ground.normal),
+                axis(level),
+                axis(fall),
+            ],
+            offsets: [0.0, 0.0, frame.ground.d as f32, 0.0, 0.0],
+            min: [f64::INFINITY; 5],
+            max: [f64::NEG_INFINITY; 5],
+            half_width_m: road.corridor_half_width_m as f32,
+            look_ahead_m: road.look_ahead_m as f32,
             corridor_pixels: 0,
-            corridor_ahead: f64::INFINITY,
+            corridor_ahead: f32::INFINITY,
             corridor_sum: 0.0,
         }
     }
 
-    fn add(
-        &mut self,
-        p: &Vector3<f64>,
-        frame: &GroundFrame,
-        level: &Vector3<f64>,
-        fall: &Vector3<f64>,
-    ) {
-        let ahead = frame.ahead(p);
-        let lateral = frame.lateral(p);
-        widen(&mut self.ahead, ahead);
-        widen(&mut self.lateral, lateral);
-        widen(&mut self.height, frame.height(p));
-        widen(&mut self.along, level.dot(p));
-        widen(&mut self.up_fall, fall.dot(p));
-        if lateral.abs() <= self.half_width_m && ahead > 0.0 && ahead <= self.look_ahead_m {
-            self.corridor_pixels += 1;
-            self.corridor_ahead = self.corridor_ahead.min(ahead);
-            self.corridor_sum += ahead;
+    /// Every `stride`-th of the `inliers`.
+    fn add_all(&mut self, cloud: &CloudView<'_>, inliers: &[u32], stride: usize) {
+        let mut min = [f32::INFINITY; 5];
+        let mut max = [f32::NEG_INFINITY; 5];
+        let mut corridor_sum = 0.0f32;
+        for &pixel in inliers.iter().step_by(stride) {
+            let Some(p) = cloud.points.get(pixel as usize) else {
+                continue;
+            };
+            let v = [p.x_m, p.y_m, p.z_m];
+            let mut c = [0.0f32; 5];
+            for k in 0..5 {
+                let a = &self.axes[k];
+                c[k] = a[0] * v[0] + a[1] * v[1] + a[2] * v[2] + self.offsets[k];
+                // A NaN (no reading: never an inlier) changes nothing.
+                min[k] = min[k].min(c[k]);
+                max[k] = max[k].max(c[k]);
+            }
+            if c[LATERAL].abs() <= self.half_width_m
+                && c[AHEAD] > 0.0
+                && c[AHEAD] <= self.look_ahead_m
+            {
+                self.corridor_pixels += 1;
+                self.corridor_ahead = self.corridor_ahead.min(c[AHEAD]);
+                corridor_sum += c[AHEAD];
+            }
         }
+        for k in 0..5 {
+            self.min[k] = self.min[k].min(f64::from(min[k]));
+            self.max[k] = self.max[k].max(f64::from(max[k]));
+        }
+        self.corridor_sum += f64::from(corridor_sum);
     }
 
     /// The rectangle of the extremes along `level` and `fall`, on `plane`.
@@ -267,12 +297,15 @@ impl Extents {
         level: &Vector3<f64>,
         fall: &Vector3<f64>,
     ) -> [Vector3<f64>; 4] {
-        if self.along.0 > self.along.1 {
+        let (s, t) = (
+            (self.min[ALONG], self.max[ALONG]),
+            (self.min[UP_FALL], self.max[UP_FALL]),
+        );
+        if !(s.0 <= s.1) {
             return [Vector3::repeat(f64::NAN); 4];
         }
         let foot = -plane.normal * plane.d;
         let corner = |s: f64, t: f64| foot + level * s + fall * t;
-        let (s, t) = (self.along, self.up_fall);
         [
             corner(s.0, t.0),
             corner(s.1, t.0),
@@ -280,12 +313,6 @@ impl Extents {
             corner(s.0, t.1),
         ]
     }
-}
-
-/// Widens `range` to hold `v`.
-fn widen(range: &mut (f64, f64), v: f64) {
-    range.0 = range.0.min(v);
-    range.1 = range.1.max(v);
 }
 
 /// `f64::INFINITY` (nothing seen) as NaN.
