@@ -9,6 +9,10 @@ Each item is a copy of one `slope.SlopeEstimate.v2` message (a
 `ctypes.Structure` with the Rust struct's fields; see `messages.py`). The
 generator sleeps on the topic's event (no polling) and wakes at least every
 `wake_s` seconds; it ends after `timeout_s` without a message when given.
+
+`subscribe_surfaces(prefix)` gives every surface of each frame instead (a
+`slope.Surfaces.v1`: role, slope, extent; `road_surface()` is the one the
+estimate's slope is measured on).
 """
 
 import ctypes
@@ -21,7 +25,11 @@ from .messages import (
     STATUS_NAMES,
     Health,
     SlopeEstimate,
+    ROLE_NAMES,
+    SUPPORT_NAMES,
     StageHealth,
+    SurfaceDescription,
+    Surfaces,
     TimingStats,
     layout,
 )
@@ -32,7 +40,11 @@ __all__ = [
     "STATUS_NAMES",
     "Health",
     "SlopeEstimate",
+    "ROLE_NAMES",
+    "SUPPORT_NAMES",
     "StageHealth",
+    "SurfaceDescription",
+    "Surfaces",
     "TimingStats",
     "ServiceNotFound",
     "SlopeClientError",
@@ -41,6 +53,7 @@ __all__ = [
     "layout",
     "subscribe",
     "subscribe_health",
+    "subscribe_surfaces",
 ]
 
 DEFAULT_PREFIX = "slope"
@@ -82,6 +95,17 @@ def subscribe_health(
 ) -> "Subscription":
     """The health reports published on `<prefix>/health`, as `subscribe`."""
     return Subscription(f"{prefix}/health", Health, timeout_s, open_timeout_s, wake_s)
+
+
+def subscribe_surfaces(
+    prefix: str = DEFAULT_PREFIX,
+    timeout_s: Optional[float] = None,
+    open_timeout_s: float = 10.0,
+    wake_s: float = 0.1,
+) -> "Subscription":
+    """Every surface of each frame, published on `<prefix>/surfaces` (a
+    `Surfaces` per frame, beside the frame's estimate), as `subscribe`."""
+    return Subscription(f"{prefix}/surfaces", Surfaces, timeout_s, open_timeout_s, wake_s)
 
 
 class Subscription:

@@ -27,6 +27,8 @@ CONFIDENCE_REASONS = [
     "ground_from_mount",
     "near_border",
     "methods_disagree",
+    "close_choice",
+    "foot_hidden",
 ]
 # HealthComponent values (`Health.component`).
 COMPONENT_NAMES = {1: "estimator", 2: "capture", 3: "replay"}
@@ -204,6 +206,110 @@ class Health(ctypes.Structure):
     @property
     def last_error_text(self) -> str:
         return self.last_error.decode("utf-8", "replace")
+
+
+# SurfaceRole values (`SurfaceDescription.role`).
+ROLE_NAMES = {0: "ground", 1: "step", 2: "ramp", 3: "wall", 4: "elevated", 5: "overhang"}
+# SurfaceSupport values (`SurfaceDescription.support`).
+SUPPORT_NAMES = {0: "none", 1: "ground", 2: "step", 3: "hidden", 4: "ramp"}
+# Bits of `SurfaceDescription.flags`.
+IN_CORRIDOR = 1 << 0
+MEASURABLE = 1 << 1
+JOINS_GROUND = 1 << 2
+# `Surfaces.road` and `SurfaceDescription.supported_by` when there is none.
+NO_SURFACE = 0xFFFFFFFF
+MAX_SURFACES = 16
+
+
+class SurfaceDescription(ctypes.Structure):
+    """`slope.SurfaceDescription.v1` (192 bytes): one surface, in the ground
+    frame (heights up from the ground, distances forward, lateral positions
+    to the right, metres); NaN marks absent values."""
+
+    _fields_ = [
+        ("role", ctypes.c_uint32),
+        ("support", ctypes.c_uint32),
+        ("supported_by", ctypes.c_uint32),
+        ("inliers", ctypes.c_uint32),
+        ("flags", ctypes.c_uint32),
+        ("segments", ctypes.c_uint32),
+        ("slope_deg", ctypes.c_double),
+        ("heading_deg", ctypes.c_double),
+        ("distance_m", ctypes.c_double),
+        ("far_m", ctypes.c_double),
+        ("left_m", ctypes.c_double),
+        ("right_m", ctypes.c_double),
+        ("lowest_m", ctypes.c_double),
+        ("highest_m", ctypes.c_double),
+        ("area_m2", ctypes.c_double),
+        ("rms_m", ctypes.c_double),
+        ("noise_ratio", ctypes.c_double),
+        ("plane", ctypes.c_double * 4),
+        ("outline", (ctypes.c_float * 3) * 4),
+    ]
+
+    @staticmethod
+    def type_name() -> str:
+        return "slope.SurfaceDescription.v1"
+
+    @property
+    def role_name(self) -> str:
+        return ROLE_NAMES.get(self.role, "unknown")
+
+    @property
+    def support_name(self) -> str:
+        return SUPPORT_NAMES.get(self.support, "unknown")
+
+    @property
+    def in_corridor(self) -> bool:
+        return bool(self.flags & IN_CORRIDOR)
+
+    @property
+    def measurable(self) -> bool:
+        return bool(self.flags & MEASURABLE)
+
+    @property
+    def joins_ground(self) -> bool:
+        return bool(self.flags & JOINS_GROUND)
+
+
+class Surfaces(ctypes.Structure):
+    """`slope.Surfaces.v1` (3216 bytes): every surface of one frame (the
+    largest first), and which is the road ahead."""
+
+    _fields_ = [
+        ("frame_index", ctypes.c_uint64),
+        ("capture_stamp_ns", ctypes.c_uint64),
+        ("publish_stamp_ns", ctypes.c_uint64),
+        ("source_stamp_ns", ctypes.c_uint64),
+        ("status", ctypes.c_uint32),
+        ("count", ctypes.c_uint32),
+        ("road", ctypes.c_uint32),
+        ("ground_from_mount", ctypes.c_uint32),
+        ("up", ctypes.c_double * 3),
+        ("forward", ctypes.c_double * 3),
+        ("ground_plane", ctypes.c_double * 4),
+        ("corridor_half_width_m", ctypes.c_double),
+        ("look_ahead_m", ctypes.c_double),
+        ("surfaces", SurfaceDescription * MAX_SURFACES),
+    ]
+
+    @staticmethod
+    def type_name() -> str:
+        return "slope.Surfaces.v1"
+
+    @property
+    def status_name(self) -> str:
+        return STATUS_NAMES.get(self.status, "bad_frame")
+
+    def present(self) -> list:
+        """The surfaces present (the first `count`)."""
+        return list(self.surfaces[: min(self.count, MAX_SURFACES)])
+
+    def road_surface(self):
+        """The road ahead, or None."""
+        present = self.present()
+        return present[self.road] if self.road < len(present) else None
 
 
 def layout(struct) -> dict:

@@ -15,7 +15,10 @@ use nix::sys::signal::Signal;
 use serde_json::Value;
 use slope_integration_tests::{deadline, replay_frames, repo_root, unique_prefix, Proc};
 use slope_ipc_types::layout::{self, FieldLayout};
-use slope_ipc_types::{confidence, EstimateStatus, SlopeMethod};
+use slope_ipc_types::{
+    confidence, surface_flags, EstimateStatus, SlopeMethod, SurfaceRole, SurfaceSupport,
+    MAX_SURFACES, NO_SURFACE,
+};
 use slope_sensor::ipc::ESTIMATE_MAX_SUBSCRIBERS;
 
 const REQUIRE_PYTHON_ENV: &str = "SLOPE_REQUIRE_PYTHON";
@@ -77,6 +80,9 @@ fn python_structures_match_the_rust_messages() {
          from slope_client import messages as m\n\
          print(json.dumps({'estimate': m.layout(m.SlopeEstimate), 'health': m.layout(m.Health),\n\
            'timing': m.layout(m.TimingStats), 'stage': m.layout(m.StageHealth),\n\
+           'surfaces': m.layout(m.Surfaces), 'surface': m.layout(m.SurfaceDescription),\n\
+           'roles': m.ROLE_NAMES, 'supports': m.SUPPORT_NAMES,\n\
+           'flags': [m.IN_CORRIDOR, m.MEASURABLE, m.JOINS_GROUND, m.NO_SURFACE, m.MAX_SURFACES],\n\
            'reasons': m.CONFIDENCE_REASONS, 'statuses': m.STATUS_NAMES, 'methods': m.METHOD_NAMES}))",
     );
     let py: Value = serde_json::from_str(&printed).expect("JSON from python");
@@ -88,6 +94,8 @@ fn python_structures_match_the_rust_messages() {
             <slope_ipc_types::Health as ZeroCopySend>::type_name(),
             <slope_ipc_types::TimingStats as ZeroCopySend>::type_name(),
             <slope_ipc_types::StageHealth as ZeroCopySend>::type_name(),
+            <slope_ipc_types::Surfaces as ZeroCopySend>::type_name(),
+            <slope_ipc_types::SurfaceDescription as ZeroCopySend>::type_name(),
         ]
     };
     let rust = [
@@ -115,6 +123,18 @@ fn python_structures_match_the_rust_messages() {
             size_of::<slope_ipc_types::StageHealth>(),
             align_of::<slope_ipc_types::StageHealth>(),
         ),
+        (
+            "surfaces",
+            layout::surfaces(),
+            size_of::<slope_ipc_types::Surfaces>(),
+            align_of::<slope_ipc_types::Surfaces>(),
+        ),
+        (
+            "surface",
+            layout::surface_description(),
+            size_of::<slope_ipc_types::SurfaceDescription>(),
+            align_of::<slope_ipc_types::SurfaceDescription>(),
+        ),
     ];
     for ((key, fields, size, align), type_name) in rust.into_iter().zip(names) {
         let p = &py[key];
@@ -131,6 +151,30 @@ fn python_structures_match_the_rust_messages() {
     for method in SlopeMethod::ALL {
         assert_eq!(py["methods"][(method as u32).to_string()], method.name());
     }
+    for role in SurfaceRole::ALL {
+        assert_eq!(py["roles"][(role as u32).to_string()], role.name());
+    }
+    for support in SurfaceSupport::ALL {
+        assert_eq!(py["supports"][(support as u32).to_string()], support.name());
+    }
+    assert_eq!(
+        py["roles"].as_object().map(|o| o.len()),
+        Some(SurfaceRole::ALL.len())
+    );
+    assert_eq!(
+        py["supports"].as_object().map(|o| o.len()),
+        Some(SurfaceSupport::ALL.len())
+    );
+    assert_eq!(
+        py["flags"],
+        serde_json::json!([
+            surface_flags::IN_CORRIDOR,
+            surface_flags::MEASURABLE,
+            surface_flags::JOINS_GROUND,
+            NO_SURFACE,
+            MAX_SURFACES
+        ])
+    );
 }
 
 /// A venv with the client installed (and with it `iceoryx2` from PyPI),
@@ -231,6 +275,88 @@ fn a_python_planner_receives_real_estimates() {
     }
     assert_eq!(frames, [0, 1, 2, 3, 4, 5], "{}", planner.diagnostics());
     planner.assert_exits_zero_within(Duration::from_secs(10));
+    replay.assert_exits_zero_within(Duration::from_secs(30));
+}
+
+/// Subscribes to the estimates and the surfaces of `sys.argv[1]`, says so on
+/// stderr, and prints one JSON line per surfaces message (its frame, the
+/// slope of that frame's estimate, published just before it, and the
+/// road's) until none came for 10 s; then `{"estimates": [frames]}`.
+const SURFACES_SUBSCRIBER: &str = r#"
+import json, sys
+import slope_client
+prefix = sys.argv[1]
+estimates = slope_client.subscribe(prefix)
+surfaces = slope_client.subscribe_surfaces(prefix, timeout_s=10)
+print(f"subscribed to {prefix}/surfaces", file=sys.stderr, flush=True)
+slopes = {}
+def drain():
+    while (e := estimates.receive()) is not None:
+        slopes[e.frame_index] = e.slope_deg
+for s in surfaces:
+    drain()
+    road = s.road_surface()
+    print(json.dumps({"frame": s.frame_index, "status": s.status_name,
+        "estimate_slope_deg": slopes.get(s.frame_index),
+        "road_role": road.role_name if road else None,
+        "road_slope_deg": road.slope_deg if road else None,
+        "count": len(s.present())}), flush=True)
+drain()
+print(json.dumps({"estimates": sorted(slopes)}), flush=True)
+"#;
+
+/// replay -> estimator -> a Python subscriber of the surfaces: the frames of
+/// the estimates (all six unless the machine is too loaded for the
+/// estimator to take every frame), each with a road whose slope is the
+/// estimate's.
+#[test]
+fn a_python_subscriber_receives_the_surfaces_of_each_estimate() {
+    let Some(bin) = client_python() else {
+        return;
+    };
+    let prefix = unique_prefix("python-surfaces");
+    let _estimator = Proc::spawn("slope-estimator", ["--service-prefix", &prefix])
+        .assert_ready("estimator ready");
+    let mut subscriber = Proc::spawn_path(&bin, ["-c", SURFACES_SUBSCRIBER, &prefix])
+        .assert_ready(&format!("subscribed to {prefix}/surfaces"));
+    let mut replay = replay_frames(&prefix, "ramp16", 5.0, 6, 1);
+    let until = deadline(60.0);
+    let mut frames = Vec::new();
+    let estimates = loop {
+        let Some(line) = subscriber.stdout_line(until) else {
+            panic!("no end of the surfaces\n{}", subscriber.diagnostics());
+        };
+        let s: Value = serde_json::from_str(&line).unwrap_or_else(|e| panic!("{line:?}: {e}"));
+        if let Some(estimates) = s.get("estimates") {
+            break estimates.clone();
+        }
+        assert_eq!(s["status"], "ok", "{s}");
+        assert_eq!(s["road_role"], "ramp", "{s}");
+        let estimate = s["estimate_slope_deg"]
+            .as_f64()
+            .expect("the frame's estimate arrived first");
+        let road = s["road_slope_deg"].as_f64().expect("a road");
+        // The road's RANSAC plane, which the fit refines: 0.02 to 0.09°
+        // apart on ramp16.
+        assert!((road - estimate).abs() < 0.25, "{s}");
+        assert!(s["count"].as_u64().expect("count") >= 2, "{s}");
+        frames.push(s["frame"].as_u64().expect("frame"));
+    };
+    assert_eq!(
+        serde_json::json!(frames),
+        estimates,
+        "the estimates' frames"
+    );
+    assert!(
+        frames.windows(2).all(|w| w[0] < w[1]),
+        "in order: {frames:?}"
+    );
+    assert!(
+        frames.len() >= 3 && frames.iter().all(|&f| f < 6),
+        "{frames:?}\n{}",
+        subscriber.diagnostics()
+    );
+    subscriber.assert_exits_zero_within(Duration::from_secs(10));
     replay.assert_exits_zero_within(Duration::from_secs(30));
 }
 

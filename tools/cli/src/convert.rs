@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context};
 use clap::Parser;
-use slope_ipc_types::{CloudPoint, SlopeEstimate, DEFAULT_MAX_CLOUD_POINTS};
+use slope_ipc_types::{CloudPoint, SlopeEstimate, Surfaces, DEFAULT_MAX_CLOUD_POINTS};
 use slope_pipeline::{CloudView, Estimator, FrameInfo};
 use slope_sensor::error_chain::ErrorChain;
 use slope_sensor::recording::{ColorImage, DepthImage, FrameEntry, Recording};
@@ -35,8 +35,9 @@ use crate::mcap_export::{McapCompression, McapFrame};
     long_about = "Writes OUT.mcap with, per frame of RECORDING, the depth image \
 (/slope/depth, foxglove.RawImage, 16UC1), the point cloud (/slope/cloud, foxglove.PointCloud: x, y, \
 z float32 and rgb: the recording's colour image, 0 for a frame without one) and the slope estimate (/slope/estimate, JSON with schema \
-slope.estimate.json/1: the keys of slope-echo --json), every channel JSON with a JSON Schema. \
-The estimates come from the estimator run here on each frame (--no-estimates leaves them out). A colour \
+slope.estimate.json/1: the keys of slope-echo --json) with every surface seen (/slope/surfaces, \
+JSON with schema slope.surfaces.json/1: the keys of slope-echo --surfaces --json), every channel \
+JSON with a JSON Schema. The estimates come from the estimator run here on each frame (--no-estimates leaves them out). A colour \
 image that cannot be read is a warning: that frame's points get rgb 0. A depth image \
 that cannot be read skips its frame (a warning); a recording whose frames.csv lists no frames, or \
 none of whose frames can be read, is refused (no file is written).
@@ -216,7 +217,8 @@ fn convert_frames(
             depth: &depth.data,
             depth_unit_m: depth_meta.unit_m,
             points: &points,
-            estimate: message.as_ref(),
+            estimate: message.as_ref().map(|(estimate, _)| estimate),
+            surfaces: message.as_ref().map(|(_, surfaces)| surfaces),
         })?;
         stats.frames += 1;
         stats.estimates += u64::from(message.is_some());
@@ -225,13 +227,14 @@ fn convert_frames(
     Ok(stats)
 }
 
-/// The estimate of one projected frame, as the message `slope-echo` shows.
+/// The estimate of one projected frame and its surfaces, as the messages
+/// `slope-echo` shows.
 fn estimate_message(
     estimator: &mut Estimator,
     recording: &Recording,
     points: &[CloudPoint],
     frame: &FrameEntry,
-) -> SlopeEstimate {
+) -> (SlopeEstimate, Surfaces) {
     let depth_meta = &recording.meta().depth;
     let view = CloudView {
         points,
@@ -251,7 +254,13 @@ fn estimate_message(
         ..SlopeEstimate::default()
     };
     estimate.write_message(&mut message);
-    message
+    let mut surfaces = Surfaces {
+        frame_index: frame.index,
+        capture_stamp_ns: frame.timestamp_ns,
+        ..Surfaces::default()
+    };
+    estimate.write_surfaces(&mut surfaces);
+    (message, surfaces)
 }
 
 /// The end of a run that converted no frame: Ok after an interruption, an

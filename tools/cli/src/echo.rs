@@ -6,7 +6,9 @@ use std::time::{Duration, Instant};
 use clap::Parser;
 use serde::Serialize;
 use slope_ipc_types::{EstimateStatus, Health, SlopeEstimate, TimingStats};
-use slope_sensor::ipc::{create_node, EstimateSubscriber, HealthSubscriber, TopicListener};
+use slope_sensor::ipc::{
+    create_node, EstimateSubscriber, HealthSubscriber, SurfacesSubscriber, TopicListener,
+};
 use slope_sensor::publish::StopFlag;
 
 use crate::cli::{
@@ -14,6 +16,7 @@ use crate::cli::{
 };
 use crate::health::summary_line;
 use crate::replay::positive_f64;
+use crate::surfaces_json::{surfaces_text, SurfacesJson};
 
 #[derive(Debug, Parser)]
 #[command(
@@ -27,6 +30,7 @@ use crate::replay::positive_f64;
   slope-echo --json | jq .slope_deg     # one JSON object per line
   slope-echo --count 10 --timeout-s 5   # ten estimates, fail if they take over 5 s
   slope-echo --health                   # the daemons' health reports instead
+  slope-echo --surfaces                 # every surface in view, the road marked
 
 Readable lines show the slope ± its spread, the distance ahead, the tracked slope ± its \
 spread (- without a track) and the confidence (with the reasons when below 1).
@@ -44,7 +48,17 @@ frames in/out/dropped, reconnects, capture-to-publish latency and per-stage time
 median/p95/max ms over the report's window, and the last error. With --json: component, pid, \
 stamp_ns, uptime_ms, frames_in, frames_out, frames_dropped, reconnects, errors, rate_in_hz, \
 rate_out_hz, window_ms, latency {median_ms, p95_ms, max_ms, count}, stages [{name, median_ms, \
-p95_ms, max_ms, count}], last_error, last_error_stamp_ns."
+p95_ms, max_ms, count}], last_error, last_error_stamp_ns.
+
+Surfaces (--surfaces) show, per frame, its status and surface count, then one line per surface \
+(the road marked ROAD): role, what it stands on, slope and heading (degrees), distance ahead \
+near..far, lateral extent left..right (negative left), height above the ground lowest..highest \
+(metres) and area (m²). With --json, one object per frame: frame, timestamp_ns, \
+publish_stamp_ns, source_stamp_ns, status, road (index or null), ground_from_mount, up, \
+forward, ground_plane, corridor_half_width_m, look_ahead_m, surfaces [{role, support, \
+supported_by, road, inliers, segments, joins_ground, in_corridor, measurable, slope_deg, \
+heading_deg, distance_m, far_m, left_m, right_m, lowest_m, highest_m, area_m2, rms_m, \
+noise_ratio, plane, outline}] (largest first; NaN as null)."
 )]
 pub struct EchoArgs {
     /// One JSON object per line instead of readable text.
@@ -53,8 +67,14 @@ pub struct EchoArgs {
 
     /// Print the daemons' health reports (topic PREFIX/health) instead of
     /// estimates; --count and --timeout-s then count reports.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "surfaces")]
     pub health: bool,
+
+    /// Print every surface of each frame (topic PREFIX/surfaces) instead of
+    /// estimates: a header line per frame, then one line per surface;
+    /// --count and --timeout-s then count frames.
+    #[arg(long)]
+    pub surfaces: bool,
 
     /// Exit (status 0) after this many messages (at least 1).
     #[arg(long, value_parser = max_frames_arg)]
@@ -250,6 +270,25 @@ pub fn run(args: &EchoArgs, stop: &StopFlag) -> anyhow::Result<u64> {
                 serde_json::to_string(&HealthJson::from(&health))?
             } else {
                 summary_line(&health)
+            }))
+        });
+    }
+    if args.surfaces {
+        let subscriber = SurfacesSubscriber::create(&node, &names)?;
+        let topic = Topic {
+            service: names.surfaces(),
+            what: "surfaces message",
+            publisher: "slope-estimator",
+        };
+        tracing::info!(service = %topic.service, "subscribed to surfaces");
+        return echo(args, stop, subscriber.listener(), &topic, || {
+            let Some(surfaces) = subscriber.receive()? else {
+                return Ok(None);
+            };
+            Ok(Some(if args.json {
+                serde_json::to_string(&SurfacesJson::from(&surfaces))?
+            } else {
+                surfaces_text(&surfaces)
             }))
         });
     }

@@ -30,5 +30,6 @@ pub mod replay;
 pub mod ros2_messages;
 pub mod rosbag2_export;
 pub mod service_manager;
+pub mod surfaces_json;
 pub mod text;
 pub mod unfinished_files;

@@ -10,6 +10,7 @@
 //! | `/slope/depth` | `foxglove.RawImage` (`16UC1`, millimetres) | always |
 //! | `/slope/cloud` | `foxglove.PointCloud` (x y z float32, rgb packed uint32) | always |
 //! | `/slope/estimate` | `slope.estimate.json/1` | when estimated |
+//! | `/slope/surfaces` | `slope.surfaces.json/1` (the keys of `slope-echo --surfaces --json`) | when estimated by `slope-convert` |
 //!
 //! A metadata record `slope.recording` ([`RECORDING_METADATA`]) names the
 //! sensor (recording.toml's `sensor`, the cloud header's for `slope-record`)
@@ -27,10 +28,11 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use base64::Engine;
 use serde_json::json;
-use slope_ipc_types::{CloudPoint, SlopeEstimate};
+use slope_ipc_types::{CloudPoint, SlopeEstimate, Surfaces};
 use slope_sensor::recording::RecordingMeta;
 
 use crate::echo::EstimateJson;
+use crate::surfaces_json::SurfacesJson;
 use crate::unfinished_files::UnfinishedFile;
 
 pub const DEPTH_TOPIC: &str = "/slope/depth";
@@ -38,6 +40,11 @@ pub const CLOUD_TOPIC: &str = "/slope/cloud";
 pub const ESTIMATE_TOPIC: &str = "/slope/estimate";
 /// The camera's frame id in every message.
 pub const FRAME_ID: &str = "slope_camera";
+/// Topic of the surfaces messages.
+pub const SURFACES_TOPIC: &str = "/slope/surfaces";
+/// `schema` of the surfaces messages.
+pub const SURFACES_SCHEMA: &str = "slope.surfaces.json/1";
+
 /// `schema` of the estimate messages.
 pub const ESTIMATE_SCHEMA: &str = "slope.estimate.json/1";
 /// Name of the metadata record that describes the recording
@@ -119,6 +126,41 @@ fn estimate_schema() -> String {
     .to_string()
 }
 
+/// The surfaces' JSON Schema: an object with `schema` and the keys of
+/// `slope-echo --surfaces --json` (documented in tools/cli/README.md).
+fn surfaces_schema() -> String {
+    let number = json!({"type": ["number", "null"]});
+    let vector = json!({"type": ["array", "null"], "items": {"type": "number"}});
+    json!({
+        "title": SURFACES_SCHEMA,
+        "description": "Every surface of one frame: the keys of slope-echo --surfaces --json",
+        "type": "object",
+        "properties": {
+            "schema": {"type": "string", "const": SURFACES_SCHEMA},
+            "frame": {"type": "integer"},
+            "timestamp_ns": {"type": "integer"},
+            "status": {"type": "string"},
+            "road": {"type": ["integer", "null"]},
+            "up": vector, "forward": vector, "ground_plane": vector,
+            "surfaces": {"type": "array", "items": {
+                "type": "object",
+                "properties": {
+                    "role": {"type": "string"}, "support": {"type": "string"},
+                    "road": {"type": "boolean"}, "inliers": {"type": "integer"},
+                    "slope_deg": number, "heading_deg": number,
+                    "distance_m": number, "far_m": number,
+                    "left_m": number, "right_m": number,
+                    "lowest_m": number, "highest_m": number, "area_m2": number,
+                    "plane": vector
+                },
+                "additionalProperties": true
+            }}
+        },
+        "additionalProperties": true
+    })
+    .to_string()
+}
+
 /// The `slope.recording` metadata of a recording: `sensor`, the depth
 /// image's `width` and `height` (pixels), its intrinsics `fx`, `fy`, `cx`,
 /// `cy` (pixels) and, each when known, `mount_height_m`, `mount_pitch_deg`
@@ -189,6 +231,7 @@ pub struct McapFrame<'a> {
     pub depth_unit_m: f64,
     pub points: &'a [CloudPoint],
     pub estimate: Option<&'a SlopeEstimate>,
+    pub surfaces: Option<&'a Surfaces>,
 }
 
 /// An MCAP file being written.
@@ -197,6 +240,7 @@ pub struct McapExporter {
     depth: u16,
     cloud: u16,
     estimate: u16,
+    surfaces: u16,
     sequence: u32,
     path: String,
     /// With [`McapExporter::create_replacing`]: the temporary file being
@@ -328,11 +372,13 @@ impl McapExporter {
         let depth = channel("foxglove.RawImage", raw_image_schema(), DEPTH_TOPIC)?;
         let cloud = channel("foxglove.PointCloud", point_cloud_schema(), CLOUD_TOPIC)?;
         let estimate = channel(ESTIMATE_SCHEMA, estimate_schema(), ESTIMATE_TOPIC)?;
+        let surfaces = channel(SURFACES_SCHEMA, surfaces_schema(), SURFACES_TOPIC)?;
         Ok(Self {
             writer,
             depth,
             cloud,
             estimate,
+            surfaces,
             sequence: 0,
             path: name,
             pending,
@@ -392,7 +438,20 @@ impl McapExporter {
         if let Some(estimate) = frame.estimate {
             self.write_estimate(estimate)?;
         }
+        if let Some(surfaces) = frame.surfaces {
+            self.write_surfaces(surfaces)?;
+        }
         Ok(())
+    }
+
+    /// Writes a frame's surfaces, stamped with its capture time.
+    pub fn write_surfaces(&mut self, surfaces: &Surfaces) -> anyhow::Result<()> {
+        let mut value = serde_json::to_value(SurfacesJson::from(surfaces))
+            .context("cannot write the surfaces as JSON")?;
+        if let Some(object) = value.as_object_mut() {
+            object.insert("schema".to_string(), json!(SURFACES_SCHEMA));
+        }
+        self.put(self.surfaces, surfaces.capture_stamp_ns, &value)
     }
 
     /// Writes an estimate, stamped with its frame's capture time (so that

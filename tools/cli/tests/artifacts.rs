@@ -406,6 +406,7 @@ fn a_converted_recording_has_one_message_per_frame_and_topic() {
             "/slope/depth" => "foxglove.RawImage",
             "/slope/cloud" => "foxglove.PointCloud",
             "/slope/estimate" => "slope.estimate.json/1",
+            "/slope/surfaces" => "slope.surfaces.json/1",
             other => panic!("unexpected topic {other}"),
         };
         assert_eq!(schema.name, expected);
@@ -415,7 +416,12 @@ fn a_converted_recording_has_one_message_per_frame_and_topic() {
             .or_default()
             .push(value);
     }
-    for topic in ["/slope/depth", "/slope/cloud", "/slope/estimate"] {
+    for topic in [
+        "/slope/depth",
+        "/slope/cloud",
+        "/slope/estimate",
+        "/slope/surfaces",
+    ] {
         assert_eq!(per_topic[topic].len(), 4, "{topic}");
     }
     let b64 = base64::engine::general_purpose::STANDARD;
@@ -457,6 +463,22 @@ fn a_converted_recording_has_one_message_per_frame_and_topic() {
         assert!(
             (e["slope_deg"].as_f64().expect("slope") - 16.0).abs() < 1.0,
             "{e}"
+        );
+        let s = &per_topic["/slope/surfaces"][k];
+        assert_eq!(s["schema"], "slope.surfaces.json/1");
+        assert_eq!(
+            (&s["frame"], &s["timestamp_ns"]),
+            (&e["frame"], &e["timestamp_ns"])
+        );
+        let road = &s["surfaces"][s["road"].as_u64().expect("a road") as usize];
+        assert_eq!(
+            (&road["road"], &road["role"]),
+            (&Value::Bool(true), &Value::from("ramp"))
+        );
+        let (found, wanted) = (road["slope_deg"].as_f64(), e["slope_deg"].as_f64());
+        assert!(
+            (found.expect("road slope") - wanted.expect("slope")).abs() < 0.25,
+            "{s}"
         );
     }
 }

@@ -243,6 +243,7 @@ fn check_details(estimate: &Value) {
             "confidence_reasons",
             "ground_from_mount",
             "tracked",
+            "surfaces",
         ] {
             assert!(estimate[key].is_null(), "{key}: {estimate}");
         }
@@ -339,7 +340,8 @@ fn check_report(report: &Value, truth: Option<f64>) -> &Value {
                 "confidence",
                 "confidence_reasons",
                 "ground_from_mount",
-                "tracked"
+                "tracked",
+                "surfaces"
             ]),
             "{estimate}"
         );
@@ -1018,6 +1020,46 @@ fn the_bundled_ramp_reports_planes_quality_confidence_and_track() {
             // Millimetre depth with Kinect noise: RMS of a few millimetres.
             assert!(num(&estimate["ground_rms_m"]) < 0.02, "{estimate}");
             assert!(num(&estimate["inclined_rms_m"]) < 0.02, "{estimate}");
+            check_road(estimate);
+        }
+    }
+}
+
+/// The frame's surfaces: the ground and one road, a ramp in the corridor
+/// joining the ground, whose RANSAC plane's slope is the estimate's within
+/// 0.25° (the fit refines it: 0.02 to 0.09° apart on ramp16), at the
+/// ground's end.
+fn check_road(estimate: &Value) {
+    let surfaces = estimate["surfaces"].as_array().unwrap();
+    let roads: Vec<&Value> = surfaces.iter().filter(|s| s["road"] == true).collect();
+    assert_eq!(roads.len(), 1, "{estimate}");
+    let road = roads[0];
+    assert_eq!(road["role"], "ramp", "{road}");
+    assert_eq!(road["support"], "ground", "{road}");
+    assert_eq!(
+        (&road["in_corridor"], &road["joins_ground"]),
+        (&Value::Bool(true), &Value::Bool(true))
+    );
+    let slope = num(&estimate["slope_deg"]);
+    assert!(
+        (num(&road["slope_deg"]) - slope).abs() < 0.25,
+        "{slope}: {road}"
+    );
+    assert!((1.35..1.65).contains(&num(&road["distance_m"])), "{road}");
+    assert!(surfaces.iter().any(|s| s["role"] == "ground"), "{estimate}");
+    for s in surfaces {
+        for key in [
+            "inliers",
+            "area_m2",
+            "rms_m",
+            "noise_ratio",
+            "left_m",
+            "right_m",
+            "lowest_m",
+            "highest_m",
+            "far_m",
+        ] {
+            assert!(!s[key].is_null(), "{key}: {s}");
         }
     }
 }

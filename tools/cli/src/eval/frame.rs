@@ -3,9 +3,11 @@
 
 use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
-use slope_ipc_types::EstimateStatus;
+use slope_ipc_types::{EstimateStatus, Surfaces};
 use slope_pipeline::tracking::TrackedSlope;
 use slope_pipeline::{Estimate, PlaneEstimate, StageTimings};
+
+use crate::surfaces_json::SurfaceJson;
 
 /// What became of one frame under one method.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -62,6 +64,10 @@ pub struct FrameDetails {
     pub ground_from_mount: Option<bool>,
     /// The slope tracked over the recording's frames so far.
     pub tracked: Option<TrackedJson>,
+    /// Every surface seen, as the estimator publishes them on
+    /// `<prefix>/surfaces` (same order, the road marked); empty without a
+    /// ground.
+    pub surfaces: Option<Vec<SurfaceJson>>,
 }
 
 /// The tracked slope after a frame.
@@ -112,8 +118,16 @@ impl FrameDetails {
             ),
             ground_from_mount: Some(estimate.ground_from_mount),
             tracked: estimate.tracked.as_ref().map(TrackedJson::from),
+            surfaces: Some(surfaces_of(estimate)),
         }
     }
+}
+
+/// The estimate's surfaces as its `Surfaces` message carries them.
+fn surfaces_of(estimate: &Estimate) -> Vec<SurfaceJson> {
+    let mut message = Surfaces::default();
+    estimate.write_surfaces(&mut message);
+    SurfaceJson::all(&message)
 }
 
 /// Stage timings serialised as `{"total": ms, "<stage>": ms, ...}` in

@@ -72,6 +72,7 @@ impl Sink {
                 depth_unit_m: TOPIC_DEPTH_UNIT_M,
                 points,
                 estimate: None,
+                surfaces: None,
             })?,
         }
         Ok(())
