@@ -514,6 +514,7 @@ mod tests {
             depth_unit_m: 0.001,
             points: &[],
             estimate: Some(&estimate),
+            surfaces: None,
         })
         .unwrap();
         bag.finish().unwrap();
