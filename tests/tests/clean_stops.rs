@@ -407,8 +407,8 @@ fn a_conversion_stops_cleanly_with_a_valid_mcap_file() {
             .expect("a finished MCAP file")
             .expect("with a summary");
         let stats = summary.stats.expect("with statistics");
-        // Three messages per frame: depth, cloud, estimate.
-        assert_eq!(stats.message_count, 3 * done as u64, "{stderr}");
+        // Four messages per frame: depth, cloud, estimate, surfaces.
+        assert_eq!(stats.message_count, 4 * done as u64, "{stderr}");
         let mut depth = 0;
         for message in mcap::MessageStream::new(&bytes).expect("an MCAP file") {
             let message = message.expect("a message");
