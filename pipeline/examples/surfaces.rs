@@ -57,25 +57,11 @@ fn print_estimate(seed: u64, e: &Estimate) {
             ""
         };
         println!(
-            "  {k:2} plane {:2}: {:8} on {:6} {:>3} slope {:7.2} heading {:7.1} ahead {:5.2}..{:5.2} \
-             lateral {:6.2}..{:6.2} height {:5.2}..{:5.2} px {:6} area {:5.2} noise {:4.1} {}{}{road}",
+            "  {k:2} plane {:2}: {s} area {:5.2} noise {:4.1}{}{road}",
             s.plane_index,
-            s.role.name(),
-            s.support.name(),
-            s.supported_by.map_or(String::new(), |i| i.to_string()),
-            s.slope_deg,
-            s.heading_deg,
-            s.distance_m,
-            s.far_m,
-            s.left_m,
-            s.right_m,
-            s.lowest_m,
-            s.highest_m,
-            s.inliers,
             s.area_m2,
             s.noise_ratio,
-            if s.in_corridor { "corridor " } else { "" },
-            if s.measurable { "measurable" } else { "" },
+            if s.measurable { " measurable" } else { "" },
         );
     }
 }

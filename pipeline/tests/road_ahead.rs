@@ -107,21 +107,7 @@ fn print_scene(seed: u64, e: &Estimate) {
             } else {
                 ""
             };
-            println!(
-                "  {k}: {:9} on {:7} slope {:7.2} heading {:7.1} ahead {:5.2}..{:5.2} lateral {:6.2}..{:6.2} height {:5.2}..{:5.2} px {:6} corridor {}{road}",
-                s.role.name(),
-                s.support.name(),
-                s.slope_deg,
-                s.heading_deg,
-                s.distance_m,
-                s.far_m,
-                s.left_m,
-                s.right_m,
-                s.lowest_m,
-                s.highest_m,
-                s.inliers,
-                s.in_corridor
-            );
+            println!("  {k}: {s}{road}");
         }
     }
 }

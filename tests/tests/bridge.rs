@@ -106,6 +106,10 @@ fn every_estimate_crosses_the_bridge_as_versioned_json() {
         .declare_subscriber(format!("{prefix}/health"))
         .wait()
         .expect("health subscriber");
+    let surfaces = session
+        .declare_subscriber(format!("{prefix}/surfaces"))
+        .wait()
+        .expect("surfaces subscriber");
 
     // The path is up once a health report (every 0.2 s) came across.
     let report = next_json(&health, deadline(30.0))
@@ -135,6 +139,18 @@ fn every_estimate_crosses_the_bridge_as_versioned_json() {
     assert_eq!(seen.last(), Some(&(frames - 1)), "{}", bridge.diagnostics());
     assert!(seen.windows(2).all(|w| w[0] < w[1]), "{seen:?}");
     assert_eq!(seen.len() as u64 + dropped, frames, "{seen:?}");
+    // Each estimate's surfaces follow it, with its frame and a ramp road.
+    for &frame in &seen {
+        let s = next_json(&surfaces, deadline(10.0))
+            .unwrap_or_else(|| panic!("no surfaces of frame {frame}\n{}", bridge.diagnostics()));
+        assert_eq!(s["schema"], "slope.surfaces.json/1", "{s}");
+        assert_eq!(s["frame"].as_u64(), Some(frame), "{s}");
+        let road = s["surfaces"]
+            .as_array()
+            .and_then(|all| all.iter().find(|x| x["road"] == true))
+            .unwrap_or_else(|| panic!("a road in {s}"));
+        assert_eq!(road["role"], "ramp", "{s}");
+    }
     replay.assert_exits_zero_within(Duration::from_secs(30));
     bridge.signal(nix::sys::signal::Signal::SIGTERM);
     bridge.assert_exits_zero_within(Duration::from_secs(5));

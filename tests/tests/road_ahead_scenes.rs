@@ -17,21 +17,7 @@ fn scene(name: &str) -> Vec<Estimate> {
     let estimates = estimates(name, &scene_file(&format!("{name}.toml")));
     for (k, e) in estimates.iter().enumerate() {
         for s in surfaces(e) {
-            println!(
-                "{name} frame {k}: {:8} on {:6} slope {:7.2} heading {:6.1} ahead {:5.2}..{:5.2} \
-                 lateral {:6.2}..{:6.2} height {:5.2}..{:5.2} corridor {}",
-                s.role.name(),
-                s.support.name(),
-                s.slope_deg,
-                s.heading_deg,
-                s.distance_m,
-                s.far_m,
-                s.left_m,
-                s.right_m,
-                s.lowest_m,
-                s.highest_m,
-                s.in_corridor,
-            );
+            println!("{name} frame {k}: {s}");
         }
     }
     estimates

@@ -83,6 +83,30 @@ impl Surface {
     }
 }
 
+/// One line for logs and examples: role, support, slope, heading, extents,
+/// heights, inliers, and whether it reaches into the corridor.
+impl std::fmt::Display for Surface {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{:8} on {:6} slope {:7.2} heading {:7.1} ahead {:5.2}..{:5.2} \
+             lateral {:6.2}..{:6.2} height {:5.2}..{:5.2} px {:6}{}",
+            self.role.name(),
+            self.support.name(),
+            self.slope_deg,
+            self.heading_deg,
+            self.distance_m,
+            self.far_m,
+            self.left_m,
+            self.right_m,
+            self.lowest_m,
+            self.highest_m,
+            self.inliers,
+            if self.in_corridor { " corridor" } else { "" },
+        )
+    }
+}
+
 /// The surfaces of every plane in `planes` over `frame`: the ground's
 /// segments (`ground`, lowest first; empty for a ground from the mount)
 /// joined into the first, then every other plane in index order. Roles are
