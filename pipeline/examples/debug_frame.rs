@@ -15,7 +15,8 @@ use slope_pipeline::cloud::angle_between_deg;
 use slope_pipeline::cosine_kmeans::CosineKmeans;
 use slope_pipeline::normals::NormalEstimator;
 use slope_pipeline::pass_through::PassThrough;
-use slope_pipeline::ransac_planes::{PlaneSegmenter, SegmentedPlane, Threshold};
+use slope_pipeline::ransac_planes::{SegmentedPlane, Threshold};
+use slope_pipeline::segmentation::Segmentation;
 use slope_pipeline::selection::{select_planes, Ground, PlaneSummary};
 use slope_pipeline::statistical_outlier::StatisticalOutlierFilter;
 use slope_pipeline::{CloudView, EstimatorConfig};
@@ -70,15 +71,17 @@ fn main() {
     }
 }
 
-/// Runs the outlier filter (printing its statistics) and RANSAC; returns
+/// Runs the outlier filter (printing its statistics) and the segmentation
+/// (`segmentation.proposal`); returns
 /// the planes found.
 fn segment_planes(view: &CloudView<'_>, config: &EstimatorConfig) -> Vec<SegmentedPlane> {
     let mut keep = Vec::new();
     let stats = StatisticalOutlierFilter::new().filter(view, &config.outlier, &mut keep);
     println!("outlier: {stats:?}");
-    let mut seg = PlaneSegmenter::new();
+    let mut seg = Segmentation::new();
     let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
-    seg.segment(view, &keep, &config.ransac, &mut rng).to_vec()
+    seg.segment(view, &keep, &config.ransac, &config.segmentation, &mut rng)
+        .to_vec()
 }
 
 /// Prints one line per plane (fit, quality, centroid, angle to `up`, pixel

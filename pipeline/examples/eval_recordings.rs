@@ -1,11 +1,12 @@
 //! Runs the estimator over recordings and prints, per recording and method,
 //! the median slope, its error against `[truth]`, the smallest and largest
 //! slope, the median of the frames' slope spreads (`slope_std_deg`) and the
-//! mean stage timings.
+//! mean stage timings; the statuses of the frames that are not `ok`.
 //!
 //! `cargo run --release -p slope-pipeline --example eval_recordings -- DIR...`
 //! (`METHODS=paper,tls`, `CONFIG='<toml>'`, `REPEAT=n` runs each frame n
-//! times and reports the median timings)
+//! times and reports the median timings, `SURFACES=1` prints every
+//! frame's surfaces and their roles)
 
 #[path = "../tests/common/mod.rs"]
 mod common;
@@ -90,6 +91,11 @@ fn run_recording(est: &mut Estimator, rec: &common::Recording, repeat: usize) ->
         // each timing's median; the estimate is the same every time.
         let runs: Vec<_> = (0..repeat).map(|_| est.estimate(&frame.view())).collect();
         let e = &runs[0];
+        if std::env::var_os("SURFACES").is_some() {
+            for s in e.scene.iter().flat_map(|scene| &scene.surfaces) {
+                println!("frame {k}: {s}");
+            }
+        }
         run.statuses.push(e.status.name());
         if e.slope_deg.is_finite() {
             run.slopes.push(e.slope_deg);
@@ -142,6 +148,16 @@ fn print_row(method: SlopeMethod, dir: &str, truth: Option<f64>, run: &Recording
         .iter()
         .map(|(s, ms)| format!("{s} {:.1}", ms / n as f64))
         .collect();
+    let mut failed: Vec<&str> = run
+        .statuses
+        .iter()
+        .copied()
+        .filter(|s| *s != "ok")
+        .collect();
+    failed.dedup();
+    if !failed.is_empty() {
+        println!("{} {dir}: not ok: {}", method.name(), failed.join(", "));
+    }
     println!(
         "{:<14} {:<40} median {:8.3} |err| {:6.3} ok {ok}/{n} min {:.2} max {:.2} median std {:.2}  {:.1} ms [{}]",
         method.name(),

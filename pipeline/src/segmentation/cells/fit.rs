@@ -1,16 +1,21 @@
 //! The fit of a proposed region: the paper's RANSAC over the region's own
-//! sample points (three-point hypotheses scored by their consensus, each
-//! new best refitted by TLS on its inliers while its consensus grows, the
-//! adaptive count for `ransac.confidence`), then the TLS plane of the
-//! winner's inliers. The region's sample cells whose point is an inlier
-//! are the plane's.
+//! free sample points (three-point hypotheses scored by their consensus,
+//! each new best refitted by TLS on its inliers while its consensus grows,
+//! the adaptive count for `ransac.confidence`), then the TLS plane of the
+//! winner's inliers. The region's free sample cells whose point is an
+//! inlier seed the plane's surface on the sample grid (`boundary.rs`: the
+//! connected free cells within the inlier distance), which is refitted by
+//! TLS and flooded once more from the refitted plane; the plane is the TLS
+//! fit of that surface. A region whose cells earlier planes took (but
+//! fewer than `min_cells`) is no plane.
 
 use nalgebra::Vector3;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 
+use super::boundary::flood_band;
 use crate::plane_fit::{fit_tls, Moments, Plane};
-use crate::ransac_planes::{RansacConfig, SampleCells, Threshold};
+use crate::ransac_planes::{RansacConfig, SampleCells, Threshold, NO_PLANE};
 
 /// Hypotheses are scored on at most this many of the region's points (a
 /// regular subset).
@@ -32,30 +37,87 @@ pub(super) struct RegionFit {
     limits: Vec<f64>,
     /// The score subset: indices into `points`.
     score: Vec<u32>,
+    /// The flood's seeds and the plane's sample cells.
+    seeds: Vec<u32>,
+    taken: Vec<u32>,
+}
+
+/// What a region's fit needs besides the region and the RANSAC config.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct FitTarget {
+    /// The label of the plane.
+    pub label: u16,
+    pub t: Threshold,
+    /// Sample cells a plane must hold.
+    pub min_cells: usize,
 }
 
 impl RegionFit {
-    /// Fits the sample points of `region` (cells of a `k x k` block grid
-    /// `grid_w` wide over the sample grid) and labels its inlier sample
-    /// cells `label`; `None` (and no label) when no plane has 3 inliers.
-    #[allow(clippy::too_many_arguments)]
+    /// Fits the free sample points of `region` (cells of a `k x k` block
+    /// grid `grid_w` wide over the sample grid) and labels the plane's
+    /// sample cells `target.label`; `None` (and no label) when no plane has
+    /// 3 inliers or its surface holds fewer than `target.min_cells` cells.
     pub fn fit(
         &mut self,
         cells: &mut SampleCells<'_>,
         (region, grid_w, k): (&[u32], usize, usize),
-        label: u16,
-        t: Threshold,
+        target: FitTarget,
         config: &RansacConfig,
         rng: &mut ChaCha8Rng,
     ) -> Option<Plane> {
+        let FitTarget {
+            label,
+            t,
+            min_cells,
+        } = target;
         self.gather(cells, region, grid_w, k, t);
-        let plane = self.settle(self.ransac(config, rng)?)?;
+        if self.points.len() < min_cells.max(3) {
+            return None;
+        }
+        let mut plane = self.settle(self.ransac(config, rng)?)?;
+        self.flood(cells, &plane, label, t);
+        if let Some(refit) = self.surface_fit(cells) {
+            // Flood again from the surface's own plane.
+            self.release(cells);
+            plane = refit;
+            self.flood(cells, &plane, label, t);
+        }
+        if self.taken.len() < min_cells {
+            self.release(cells);
+            return None;
+        }
+        Some(self.surface_fit(cells).unwrap_or(plane))
+    }
+
+    /// The TLS plane of the last flood's cells.
+    fn surface_fit(&self, cells: &SampleCells<'_>) -> Option<Plane> {
+        let mut moments = Moments::new();
+        for &c in &self.taken {
+            moments.add(&cells.points[c as usize]);
+        }
+        fit_tls(&moments)
+    }
+
+    /// Labels the region's free points within the inlier distance of
+    /// `plane` and floods the band from them (`taken`: the cells labelled).
+    fn flood(&mut self, cells: &mut SampleCells<'_>, plane: &Plane, label: u16, t: Threshold) {
+        self.seeds.clear();
         for ((p, &limit), &c) in self.points.iter().zip(&self.limits).zip(&self.sample_cells) {
-            if plane.signed_distance(p).abs() <= limit {
+            if plane.signed_distance(p).abs() <= limit && cells.labels[c as usize] == NO_PLANE {
                 cells.labels[c as usize] = label;
+                self.seeds.push(c);
             }
         }
-        Some(plane)
+        self.taken.clear();
+        flood_band(cells, plane, label, t, (&self.seeds, &mut self.taken));
+    }
+
+    /// Frees the cells of the last flood.
+    fn release(&mut self, cells: &mut SampleCells<'_>) {
+        for &c in &self.taken {
+            cells.labels[c as usize] = NO_PLANE;
+        }
+        self.taken.clear();
     }
 
     /// The TLS plane of `plane`'s inliers among all the region's points,
@@ -79,7 +141,7 @@ impl RegionFit {
         Some(plane)
     }
 
-    /// The region's sample points (raster order within each cell).
+    /// The region's free sample points (raster order within each cell).
     fn gather(
         &mut self,
         cells: &SampleCells<'_>,
@@ -97,7 +159,7 @@ impl RegionFit {
                 for column in cu * k..((cu + 1) * k).min(cells.width) {
                     let j = row * cells.width + column;
                     let p = cells.points[j];
-                    if p.x.is_finite() {
+                    if p.x.is_finite() && cells.labels[j] == NO_PLANE {
                         self.points.push(p);
                         self.sample_cells.push(j as u32);
                         self.limits.push(t.at(&p));

@@ -29,8 +29,6 @@
 //! frame), a flood over the cells, and a few dozen hypotheses per region
 //! scored on at most 500 points; no extraction loop over the frame.
 
-use std::collections::VecDeque;
-
 use rand_chacha::ChaCha8Rng;
 
 use crate::cloud::CloudView;
@@ -55,7 +53,6 @@ pub struct CellProposal {
     fit: fit::RegionFit,
     /// Regions by size, largest first.
     order: Vec<usize>,
-    queue: VecDeque<u32>,
 }
 
 impl CellProposal {
@@ -116,6 +113,8 @@ impl PlaneProposal for ConfiguredCells<'_> {
                 .total_cmp(&regions[a].sums[0])
                 .then(a.cmp(&b))
         });
+        let s2 = (stride * stride) as f64;
+        let min_cells = ((ransac.min_plane_points as f64 / s2).ceil() as usize).max(3);
         let mut found = Vec::new();
         for &r in &p.order {
             if found.len() >= ransac.max_planes.min(crate::ransac_planes::MAX_PLANES) {
@@ -123,19 +122,21 @@ impl PlaneProposal for ConfiguredCells<'_> {
             }
             let region = &regions[r];
             let region_cells = &p.regions.cells[region.start..region.end];
-            let label = found.len() as u16;
+            let target = fit::FitTarget {
+                label: found.len() as u16,
+                t,
+                min_cells,
+            };
             if let Some(plane) = p.fit.fit(
                 &mut cells,
                 (region_cells, p.grid.width, k),
-                label,
-                t,
+                target,
                 ransac,
                 rng,
             ) {
                 found.push(plane);
             }
         }
-        boundary::grow_labels(&mut cells, &found, t, &mut p.queue);
         found
     }
 }
