@@ -6,7 +6,8 @@
 //! `cargo run --release -p slope-pipeline --example eval_recordings -- DIR...`
 //! (`METHODS=paper,tls`, `CONFIG='<toml>'`, `REPEAT=n` runs each frame n
 //! times and reports the median timings, `SURFACES=1` prints every
-//! frame's surfaces and their roles)
+//! frame's surfaces and their roles, `MIRRORED=1` mirrors every frame
+//! left-right as `tests/mirror_invariance.rs` does)
 
 #[path = "../tests/common/mod.rs"]
 mod common;
@@ -86,7 +87,12 @@ fn run_recording(est: &mut Estimator, rec: &common::Recording, repeat: usize) ->
         ..RecordingRun::default()
     };
     for k in 0..run.frames {
-        let frame = rec.frame(k).expect("frame");
+        let view = if std::env::var_os("MIRRORED").is_some() {
+            common::View::Mirrored
+        } else {
+            common::View::AsRecorded
+        };
+        let frame = rec.frame_as(k, view).expect("frame");
         // REPEAT=n: run each frame n times (warm buffers) and take
         // each timing's median; the estimate is the same every time.
         let runs: Vec<_> = (0..repeat).map(|_| est.estimate(&frame.view())).collect();

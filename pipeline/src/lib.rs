@@ -8,7 +8,7 @@
 //! | file | stage |
 //! |---|---|
 //! | `statistical_outlier/` | 1. statistical outlier removal (m = 20, alpha = 2; grid path, exact fallback, general m, threshold) |
-//! | `segmentation/` | 2. plane segmentation: the design chosen by `segmentation.proposal`; `cells/` the cell-grid proposal (planar cells, region growing, RANSAC fit per region, boundary) |
+//! | `segmentation/` | 2. plane segmentation: the design chosen by `segmentation.proposal`; `cells/` the cell-grid proposal (planar cells, region growing, RANSAC fit per region, its band flooded, coplanar merge, the sequential extraction on the rest) |
 //! | `ransac_planes/` | 2. RANSAC plane segmentation, sequential (sample grid, f32 inlier test, hypotheses, regions, labelling; the labelling both designs share) |
 //! | `pass_through.rs` | 3. pass-through filter (at most 10,000 points a plane) |
 //! | `normals/` | 4. PCA normals over K = 100 neighbours (window tables, k-d tree fallback, coarse grid normals) |

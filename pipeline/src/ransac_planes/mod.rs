@@ -192,13 +192,10 @@ impl PlaneSegmenter {
             self.planes.clear();
             return &self.planes;
         }
-        let cos_gate = if config.normal_threshold_deg > 0.0 && config.normal_threshold_deg < 90.0 {
-            Some(config.normal_threshold_deg.to_radians().cos())
-        } else {
-            None
-        };
+        let cos_gate = normal_gate(config);
         self.load_sample(cloud, keep, config, cos_gate);
-        let found = self.extract_planes(config, cos_gate.is_some(), rng);
+        let total = self.sample.points.len();
+        let found = self.extract_planes(config, (cos_gate.is_some(), total), rng, Vec::new());
         self.finish(cloud, keep, config, found)
     }
 
@@ -217,7 +214,9 @@ impl PlaneSegmenter {
             self.planes.clear();
             return &self.planes;
         }
-        self.load_sample(cloud, keep, config, None);
+        let cos_gate = normal_gate(config);
+        self.load_sample(cloud, keep, config, cos_gate);
+        let total = self.sample.points.len();
         let cells = SampleCells {
             width: self.sample.coarse_w,
             height: self.sample.coarse_h,
@@ -232,6 +231,15 @@ impl PlaneSegmenter {
                 *label = NO_PLANE;
             }
         }
+        // What the proposal left (thin structures no cell is planar on: a
+        // table's legs and edge) goes to the sequential extraction.
+        self.region.clear();
+        self.region.extend(
+            (0..self.cell_plane.len() as u32).filter(|&c| self.cell_plane[c as usize] != NO_PLANE),
+        );
+        self.sample.remove_cells(&self.region);
+        self.drop_points_on(&found);
+        let found = self.extract_planes(config, (cos_gate.is_some(), total), rng, found);
         self.finish(cloud, keep, config, found)
     }
 
@@ -258,20 +266,21 @@ impl PlaneSegmenter {
             .resize(self.sample.coarse_w * self.sample.coarse_h, NO_PLANE);
     }
 
-    /// The extraction loop on the sample: planes one after another, each
-    /// the largest connected region of the best hypothesis's inliers.
+    /// The extraction loop on the free sample points: planes one after
+    /// another (after those `found` already), each the largest connected
+    /// region of the best hypothesis's inliers, until fewer than
+    /// `min_remaining_fraction` of the `total` sample points are free.
     fn extract_planes(
         &mut self,
         config: &RansacConfig,
-        gated: bool,
+        (gated, total): (bool, usize),
         rng: &mut ChaCha8Rng,
+        mut found: Vec<Plane>,
     ) -> Vec<Plane> {
-        let total = self.sample.points.len();
         // A plane's sample region must stand for `min_plane_points` pixels.
         let s2 = (self.sample.stride as f64).powi(2);
         let min_cells = ((config.min_plane_points as f64 / s2).ceil() as usize).max(3);
         let mut failures = 0;
-        let mut found: Vec<Plane> = Vec::new();
         while found.len() < config.max_planes.min(MAX_PLANES)
             && self.sample.points.len() >= 3
             && (self.sample.points.len() as f64) >= config.min_remaining_fraction * total as f64
@@ -329,6 +338,26 @@ impl PlaneSegmenter {
         self.sample.remove(&self.flags);
     }
 
+    /// Drops the free sample points within the inlier distance of any of
+    /// `planes` (pieces of those planes that no region reached: a floor
+    /// beyond a cabinet), so that the extraction after a proposal finds
+    /// only what no proposed plane explains.
+    fn drop_points_on(&mut self, planes: &[Plane]) {
+        let mut drop = std::mem::take(&mut self.in_work);
+        drop.clear();
+        drop.resize(self.sample.points.len(), false);
+        for plane in planes {
+            self.sample
+                .points
+                .inlier_flags(plane, Gate::DistanceOnly, &mut self.flags);
+            for (d, &f) in drop.iter_mut().zip(&self.flags) {
+                *d |= f;
+            }
+        }
+        self.sample.remove(&drop);
+        self.in_work = drop;
+    }
+
     /// Gives the cells of `region` to plane `label` and takes them out of
     /// the sample.
     fn take_region(&mut self, label: u16) {
@@ -369,6 +398,12 @@ impl PlaneSegmenter {
             .retain(|p| p.inliers.len() >= config.min_plane_points.max(3));
         &self.planes
     }
+}
+
+/// The cosine of the coarse-normal gate, `None` when off.
+fn normal_gate(config: &RansacConfig) -> Option<f64> {
+    (config.normal_threshold_deg > 0.0 && config.normal_threshold_deg < 90.0)
+        .then(|| config.normal_threshold_deg.to_radians().cos())
 }
 
 /// RMS distance from `plane` of the points summed in `moments` (0 if none).

@@ -11,8 +11,10 @@ use crate::validate::{angle, check, count_in, positive, InvalidValue};
 #[serde(rename_all = "kebab-case")]
 pub enum Proposal {
     /// Planar cells of the pixel grid grown into regions, each region's
-    /// plane fitted by RANSAC over its own points (`segmentation/cells/`).
-    /// An option: it fails two cluttered-scene tests (pipeline README).
+    /// plane fitted by RANSAC over its own points and flooded over its
+    /// band (`segmentation/cells/`). An option: with it every accuracy
+    /// test holds but the mirror gap of `tests/mirror_invariance.rs`
+    /// (pipeline README, item 10).
     Cells,
     /// RANSAC extractions one after another on the sample grid, each plane
     /// the largest connected region of the best hypothesis's inliers

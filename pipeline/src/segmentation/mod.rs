@@ -6,12 +6,13 @@
 //!   one after another on a sample of the pixel grid, each plane the
 //!   largest connected region of the best hypothesis's inliers;
 //! - `"cells"` (`cells/`): planar cells of the pixel grid grown into
-//!   regions propose the planes, and the paper's RANSAC fits each region's
-//!   plane over the region's own points. An option, not the default: it
-//!   holds every accuracy test of the real frames and the simulated ramps
-//!   but two cluttered scenes (a bumpy bed side, in
-//!   `tests/tests/cluttered_scenes.rs`, gives small flat pieces the
-//!   selection takes for a slope).
+//!   regions propose the planes, the paper's RANSAC fits each region's
+//!   plane over the region's own points and the plane floods its band on
+//!   the sample grid; the sequential extraction then runs on what no
+//!   proposed plane explains. An option, not the default: every accuracy
+//!   test holds with it (the real frames, the simulated ramps, the
+//!   cluttered and road-ahead scenes) but the mirror gap of
+//!   `tests/mirror_invariance.rs` (pipeline README, item 10).
 //!
 //! Both end the same way: every kept pixel goes to the nearest plane of
 //! the sample cells around it within the inlier distance, and each plane

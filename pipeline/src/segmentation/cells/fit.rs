@@ -21,7 +21,7 @@ use crate::ransac_planes::{RansacConfig, SampleCells, Threshold, NO_PLANE};
 /// regular subset).
 const SCORE_POINTS: usize = 500;
 /// Hypotheses drawn per region at least.
-const MIN_HYPOTHESES: usize = 8;
+const MIN_HYPOTHESES: usize = 32;
 /// Local-optimisation refits of a new best, at most.
 const LO_STEPS: usize = 4;
 /// Refits of the winner on all the region's points, at most.
@@ -87,6 +87,11 @@ impl RegionFit {
             return None;
         }
         Some(self.surface_fit(cells).unwrap_or(plane))
+    }
+
+    /// The sample cells of the last plane fitted.
+    pub fn taken(&self) -> &[u32] {
+        &self.taken
     }
 
     /// The TLS plane of the last flood's cells.

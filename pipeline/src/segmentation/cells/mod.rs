@@ -15,19 +15,35 @@
 //!    the inlier distance of the region's plane (refitted from the summed
 //!    moments each time the region doubles). A region must hold
 //!    `ransac.min_plane_points` pixels.
-//! 3. *Fit* (`fit.rs`): RANSAC over the region's sample points (three-point
-//!    hypotheses, consensus, LO refits, adaptive count for
-//!    `ransac.confidence`), then the TLS plane of its inliers; those sample
-//!    cells are the plane's.
-//! 4. *Boundary* (`boundary.rs`): the sample cells left between regions go
-//!    to a neighbouring plane within its inlier distance.
+//! 3. *Fit* (`fit.rs`), largest region first: RANSAC over the region's
+//!    free sample points (three-point hypotheses, consensus, LO refits, at
+//!    least 32 hypotheses and the adaptive count for `ransac.confidence`),
+//!    then the TLS plane of its inliers.
+//! 4. *Surface* (`boundary.rs`): the fitted plane floods its band on the
+//!    sample grid (free cells 8-connected to the region's inliers within
+//!    the inlier distance, distance only, refitted between layers as the
+//!    surface doubles), then floods once more from its surface's TLS
+//!    plane. The flood takes the non-planar cells along the region's
+//!    edges and the neighbouring regions on the same plane (the facets of
+//!    a rough surface, a bed's fabric side, whose cell normals differ by
+//!    more than the merge angle): a plane is then, as in the sequential
+//!    extraction, the connected band of its inliers. A region whose cells
+//!    earlier planes took (all but fewer than `min_plane_points / stride^2`
+//!    cells) is no plane.
+//! 5. *Merge*: a plane within 1 degree of an earlier one with 90 % of its
+//!    cells within that plane's inlier distance joins it (two pieces of a
+//!    ramp parted by a table standing on it).
 //!
-//! The labelling, junction relaxation and final TLS refit on every pixel
-//! are the sequential segmentation's (`ransac_planes/labelling.rs`).
-//! What it costs: one pass over a quarter of the pixels (the sums), one
-//! eigen-decomposition per cell (about 3,400 cells of 8 px on a Kinect v2
-//! frame), a flood over the cells, and a few dozen hypotheses per region
-//! scored on at most 500 points; no extraction loop over the frame.
+//! After the proposal, the free sample points within the inlier distance
+//! of a proposed plane are dropped, and the sequential extraction
+//! (`ransac_planes/`) runs on what is left: thin structures on which no
+//! cell is planar (a table's legs and edge). The labelling, junction
+//! relaxation and final TLS refit on every pixel are the sequential
+//! segmentation's (`ransac_planes/labelling.rs`).
+//!
+//! What it costs (`Estimator::run` on stairs-front, callgrind): the cells
+//! 5.0 M, region growing 2.0 M, the fits and floods 11.8 M, the extraction
+//! over what is left about 4 M, the labelling 33 M (BENCHMARKS.md).
 
 use rand_chacha::ChaCha8Rng;
 
@@ -134,12 +150,55 @@ impl PlaneProposal for ConfiguredCells<'_> {
                 ransac,
                 rng,
             ) {
-                found.push(plane);
+                match coplanar_with(&found, &plane, p.fit.taken(), &cells, t) {
+                    Some(j) => {
+                        for &c in p.fit.taken() {
+                            cells.labels[c as usize] = j;
+                        }
+                    }
+                    None => found.push(plane),
+                }
             }
         }
         found
     }
 }
+
+/// The first of `found` that `plane` (whose sample cells are `taken`)
+/// lies on: normals within [`COPLANAR_DEG`], and [`COPLANAR_SHARE`] of
+/// the cells within the inlier distance of it. Two pieces of one plane
+/// that an obstacle parts (a ramp seen beside a table and under it) are
+/// then one plane, as in CAPE's merging of regions on one plane.
+fn coplanar_with(
+    found: &[Plane],
+    plane: &Plane,
+    taken: &[u32],
+    cells: &SampleCells<'_>,
+    t: Threshold,
+) -> Option<u16> {
+    let cos = COPLANAR_DEG.to_radians().cos();
+    found
+        .iter()
+        .position(|f| {
+            f.normal.dot(&plane.normal).abs() >= cos && {
+                let on = taken
+                    .iter()
+                    .filter(|&&c| {
+                        let q = &cells.points[c as usize];
+                        f.signed_distance(q).abs() <= t.at(q)
+                    })
+                    .count();
+                on as f64 >= COPLANAR_SHARE * taken.len() as f64
+            }
+        })
+        .map(|j| j as u16)
+}
+
+/// Planes whose normals are within this many degrees may be one plane.
+const COPLANAR_DEG: f64 = 1.0;
+/// The share of a plane's sample cells within the inlier distance of an
+/// earlier plane that makes it part of that plane.
+const COPLANAR_SHARE: f64 = 0.9;
 
 #[cfg(test)]
 mod tests;
