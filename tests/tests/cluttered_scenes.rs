@@ -6,8 +6,9 @@
 
 mod scene_render;
 
-use scene_render::{estimates, scene_file};
-use slope_pipeline::{Estimate, EstimateStatus};
+use scene_render::{estimates, estimates_with, scene_file};
+use slope_pipeline::segmentation::Proposal;
+use slope_pipeline::{Estimate, EstimateStatus, EstimatorConfig};
 
 /// Every frame `ok` and within `tol` of the signed truth.
 fn assert_measures(estimates: &[Estimate], truth: f64, tol: f64) {
@@ -69,6 +70,19 @@ fn a_table_hiding_the_floor_is_not_the_ground() {
 #[test]
 fn a_bed_s_soft_side_is_not_a_slope() {
     let e = estimates("bed", &scene_file("soft_block_bed.toml"));
+    assert_no_ramp(&e);
+    assert_ground_seen_at(&e, 1.2);
+}
+
+/// The bed with the cell-grid plane proposal (`segmentation.proposal =
+/// "cells"`): each fitted plane floods its band over the neighbouring
+/// facets of the fabric, so the soft side is one rough plane, no slope
+/// (its smooth facets, flat to 5 mm, were each a plane before).
+#[test]
+fn the_cell_proposal_takes_a_bed_s_soft_side_for_no_slope() {
+    let mut config = EstimatorConfig::default();
+    config.segmentation.proposal = Proposal::Cells;
+    let e = estimates_with("bed-cells", &scene_file("soft_block_bed.toml"), config);
     assert_no_ramp(&e);
     assert_ground_seen_at(&e, 1.2);
 }

@@ -17,6 +17,11 @@ pub const FRAMES: u64 = 4;
 
 /// Renders `toml` (a slope-synth scene) and estimates every frame.
 pub fn estimates(name: &str, toml: &str) -> Vec<Estimate> {
+    estimates_with(name, toml, EstimatorConfig::default())
+}
+
+/// [`estimates`] with the estimator configured by `config`.
+pub fn estimates_with(name: &str, toml: &str, config: EstimatorConfig) -> Vec<Estimate> {
     let dir = tempfile::tempdir().expect("temp dir");
     let out = dir.path().join(name);
     let file = parse_scene(toml, Path::new(name)).unwrap_or_else(|e| panic!("{e}"));
@@ -25,7 +30,7 @@ pub fn estimates(name: &str, toml: &str) -> Vec<Estimate> {
     let rec = Recording::open(&out).unwrap_or_else(|e| panic!("{e}"));
     let projector = rec.projector();
     let mut points = vec![CloudPoint::INVALID; projector.len()];
-    let mut est = Estimator::new(EstimatorConfig::default());
+    let mut est = Estimator::new(config);
     rec.frames()
         .iter()
         .map(|entry| {
