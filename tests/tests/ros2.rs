@@ -1,0 +1,358 @@
+//! slope-replay -> slope-estimator -> slope-ros2 -> DDS -> Eclipse Cyclone
+//! DDS (the PyPI package `cyclonedds`, a DDS implementation independent of
+//! RustDDS, the one `rmw_cyclonedds` uses in ROS 2) with IDL types written
+//! from the .msg files (`tests/python/ros2_types.py`), on the loopback only:
+//! slope-ros2 with `ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`, Cyclone
+//! restricted to `lo`, multicast off, `127.0.0.1` its static peer (the
+//! loopback has no multicast flag: RustDDS unicasts its localhost
+//! discovery to the well-known ports, where Cyclone listens).
+//!
+//! Each test has its own service prefix and DDS domain. Without Python or
+//! PyPI the tests say why and skip, unless `SLOPE_REQUIRE_PYTHON` (or `CI`)
+//! is set: then they fail.
+#![cfg(feature = "ros2")]
+
+use std::ffi::OsStr;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::atomic::{AtomicU16, Ordering};
+use std::time::{Duration, Instant};
+
+use serde_json::Value;
+use slope_integration_tests::{
+    deadline, read_json_lines, replay_frames, repo_root, start_echo, start_estimator,
+    unique_prefix, Proc,
+};
+use slope_ipc_types::{confidence, EstimateStatus, SlopeMethod};
+
+const REQUIRE_PYTHON_ENV: &str = "SLOPE_REQUIRE_PYTHON";
+/// Frames replayed in a test.
+const FRAMES: u64 = 8;
+
+fn python() -> String {
+    std::env::var("PYTHON").unwrap_or_else(|_| "python3".to_string())
+}
+
+fn python_optional() -> bool {
+    std::env::var_os(REQUIRE_PYTHON_ENV).is_none() && std::env::var_os("CI").is_none()
+}
+
+/// A venv with `cyclonedds` and `rosbags`, or why there is none.
+fn make_venv() -> Result<PathBuf, String> {
+    let venv = Path::new(env!("CARGO_TARGET_TMPDIR")).join("ros2-venv");
+    let bin = venv.join("bin/python");
+    if !bin.exists() {
+        let made = Command::new(python())
+            .args(["-m", "venv"])
+            .arg(&venv)
+            .output()
+            .map_err(|e| format!("cannot run {}: {e}", python()))?;
+        if !made.status.success() {
+            return Err(format!(
+                "python3 -m venv failed: {}",
+                String::from_utf8_lossy(&made.stderr)
+            ));
+        }
+    }
+    let present = Command::new(&bin)
+        .args(["-c", "import cyclonedds, rosbags"])
+        .output()
+        .is_ok_and(|out| out.status.success());
+    if present {
+        return Ok(bin);
+    }
+    let installed = Command::new(&bin)
+        .args([
+            "-m",
+            "pip",
+            "install",
+            "--quiet",
+            "--disable-pip-version-check",
+            "cyclonedds",
+            "rosbags",
+        ])
+        .output()
+        .map_err(|e| format!("cannot run pip: {e}"))?;
+    if !installed.status.success() {
+        return Err(format!(
+            "pip install cyclonedds rosbags failed: {}",
+            String::from_utf8_lossy(&installed.stderr)
+        ));
+    }
+    Ok(bin)
+}
+
+/// The venv's interpreter, made once for all the tests of this file, or
+/// `None` (the test skips) when it cannot be made and Python is optional.
+fn venv_python() -> Option<PathBuf> {
+    static VENV: std::sync::OnceLock<Result<PathBuf, String>> = std::sync::OnceLock::new();
+    match VENV.get_or_init(make_venv).clone() {
+        Ok(bin) => Some(bin),
+        Err(why) => {
+            assert!(python_optional(), "the Python venv cannot be made: {why}");
+            eprintln!("SKIPPED: the Python venv cannot be made here ({why})");
+            None
+        }
+    }
+}
+
+/// A DDS domain no other test of this run uses (the process id spreads
+/// parallel runs; 0, ROS's default, is left alone).
+fn unique_domain() -> u16 {
+    static NEXT: AtomicU16 = AtomicU16::new(0);
+    let base = (std::process::id() % 100) as u16;
+    100 + (base + NEXT.fetch_add(1, Ordering::SeqCst)) % 100
+}
+
+/// Cyclone DDS on the loopback only: no multicast, 127.0.0.1 as its peer
+/// (it sends discovery to the unicast ports of participant indices 0..20
+/// there, where RustDDS listens).
+const CYCLONE_LOOPBACK: &str = "<CycloneDDS><Domain id=\"any\"><General><Interfaces>\
+<NetworkInterface name=\"lo\"/></Interfaces><AllowMulticast>false</AllowMulticast></General>\
+<Discovery><ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>20\
+</MaxAutoParticipantIndex><Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery></Domain>\
+</CycloneDDS>";
+
+/// A Cyclone DDS subscriber (`tests/python/ros2_listen.py`) on `domain`
+/// to `topics` (`DDS_TOPIC:TYPE:RELIABILITY:DURABILITY`).
+struct Listener {
+    proc: Proc,
+}
+
+impl Listener {
+    fn start(python: &Path, domain: u16, topics: &[&str]) -> Self {
+        let script = repo_root().join("tests/python/ros2_listen.py");
+        let domain = domain.to_string();
+        let mut args: Vec<&OsStr> = vec![script.as_os_str(), domain.as_ref(), "120".as_ref()];
+        args.extend(topics.iter().map(OsStr::new));
+        let python_path = repo_root().join("tests/python");
+        let proc = Proc::spawn_path_with_env(
+            python,
+            args,
+            &[
+                ("PYTHONPATH", python_path.as_os_str()),
+                ("CYCLONEDDS_URI", OsStr::new(CYCLONE_LOOPBACK)),
+            ],
+        );
+        Self { proc }
+    }
+
+    /// The next JSON line, or `None` at `until`.
+    fn next(&mut self, until: Instant) -> Option<Value> {
+        let line = self.proc.stdout_line(until)?;
+        Some(serde_json::from_str(&line).unwrap_or_else(|e| panic!("{line:?}: {e}")))
+    }
+
+    /// Waits until every topic of `topics` has matched a writer; samples
+    /// seen meanwhile are returned.
+    fn wait_matched(&mut self, topics: &[&str], seconds: f64) -> Vec<Value> {
+        let until = deadline(seconds);
+        let mut left: Vec<&str> = topics.to_vec();
+        let mut early = Vec::new();
+        while !left.is_empty() {
+            let Some(line) = self.next(until) else {
+                panic!(
+                    "Cyclone DDS never matched {left:?}\n{}",
+                    self.proc.diagnostics()
+                );
+            };
+            match line["matched"].as_str() {
+                Some(topic) => left.retain(|t| *t != topic),
+                None => early.push(line),
+            }
+        }
+        early
+    }
+}
+
+/// slope-ros2 on `prefix` and `domain`, on the loopback, with `extra`
+/// flags; once it is ready.
+fn start_node(prefix: &str, domain: u16, extra: &[&str]) -> Proc {
+    let domain = domain.to_string();
+    let mut args = vec!["--service-prefix", prefix, "--domain-id", &domain];
+    args.extend_from_slice(extra);
+    Proc::spawn_with_env(
+        "slope-ros2",
+        &args,
+        &[("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")],
+    )
+    .assert_ready("ros2 node ready")
+}
+
+/// The echo JSON's value of `key` where absent values are `null`, and the
+/// message's float (NaN arrives as `null` from the listener).
+fn same_number(echo: &Value, dds: &Value, what: &str) {
+    assert_eq!(echo, dds, "{what}: slope-echo {echo}, DDS {dds}");
+}
+
+/// Every value of `slope-echo --json`'s estimate `echo` in the DDS
+/// message `dds`.
+fn assert_same_estimate(echo: &Value, dds: &Value) {
+    let frame = echo["frame"].as_u64().expect("frame");
+    let what = |key: &str| format!("frame {frame} {key}");
+    for (echo_key, dds_key) in [
+        ("frame", "frame_index"),
+        ("timestamp_ns", "capture_stamp_ns"),
+        ("publish_stamp_ns", "publish_stamp_ns"),
+        ("source_stamp_ns", "source_stamp_ns"),
+        ("dropped_frames", "dropped_frames"),
+        ("slope_deg", "slope_deg"),
+        ("std_deg", "slope_std_deg"),
+        ("distance_m", "distance_m"),
+        ("ground_inliers", "ground_inliers"),
+        ("inclined_inliers", "inclined_inliers"),
+        ("samples", "samples"),
+        ("confidence", "confidence"),
+        ("ground_rms_m", "ground_rms_m"),
+        ("inclined_rms_m", "inclined_rms_m"),
+        ("ground_area_m2", "ground_area_m2"),
+        ("inclined_area_m2", "inclined_area_m2"),
+        ("ground_seen_to_m", "ground_seen_to_m"),
+        ("tracked_slope_deg", "tracked_slope_deg"),
+        ("tracked_std_deg", "tracked_std_deg"),
+        ("tracked_frames", "tracked_frames"),
+        ("ground_plane", "ground_plane"),
+        ("inclined_plane", "inclined_plane"),
+    ] {
+        same_number(&echo[echo_key], &dds[dds_key], &what(echo_key));
+    }
+    let status = EstimateStatus::ALL
+        .into_iter()
+        .find(|s| Some(*s as u64) == dds["status"].as_u64())
+        .expect("a known status");
+    assert_eq!(echo["status"], status.name(), "{}", what("status"));
+    let method = SlopeMethod::ALL
+        .into_iter()
+        .find(|m| Some(*m as u64) == dds["method"].as_u64())
+        .expect("a known method");
+    assert_eq!(echo["method"], method.name(), "{}", what("method"));
+    let bits = dds["confidence_reasons"].as_u64().expect("reasons");
+    let names: Vec<&str> = confidence::ALL
+        .iter()
+        .filter(|(bit, _)| bits & u64::from(*bit) != 0)
+        .map(|(_, name)| *name)
+        .collect();
+    assert_eq!(echo["confidence_reasons"], serde_json::json!(names));
+    assert_eq!(
+        echo["ground_from_mount"].as_bool(),
+        Some(dds["ground_from_mount"] == 1)
+    );
+    assert_eq!(
+        echo["tracked_accepted"].as_bool(),
+        Some(dds["tracked_accepted"] == 1)
+    );
+    let processing_us = dds["processing_us"].as_u64().expect("processing_us");
+    assert_eq!(
+        echo["processing_ms"].as_f64(),
+        Some(processing_us as f64 / 1000.0)
+    );
+    // The header: the capture stamp, the camera's frame.
+    let stamp = echo["timestamp_ns"].as_u64().expect("stamp");
+    let header = &dds["header"];
+    assert_eq!(header["stamp"]["sec"].as_u64(), Some(stamp / 1_000_000_000));
+    assert_eq!(
+        header["stamp"]["nanosec"].as_u64(),
+        Some(stamp % 1_000_000_000)
+    );
+    assert_eq!(header["frame_id"], "slope_camera");
+}
+
+const ESTIMATE: &str = "rt/slope/estimate:SlopeEstimate:reliable:transient_local";
+
+#[test]
+fn every_estimate_reaches_cyclone_dds_in_order_with_the_values_echo_shows() {
+    let Some(python) = venv_python() else {
+        return;
+    };
+    let prefix = unique_prefix("ros2");
+    let domain = unique_domain();
+    let _estimator = start_estimator(&prefix, &["--health-interval-s", "0.2"]);
+    let mut node = start_node(&prefix, domain, &[]);
+    let mut echo = start_echo(&prefix, FRAMES as usize);
+    let mut listener = Listener::start(&python, domain, &[ESTIMATE]);
+    let early = listener.wait_matched(&["rt/slope/estimate"], 30.0);
+    assert!(early.is_empty(), "samples before any frame: {early:?}");
+
+    let mut replay = replay_frames(&prefix, "ramp16", 5.0, FRAMES, 1);
+    // slope-echo prints every estimate the estimator published (a loaded
+    // machine may make the estimator skip a frame, which it then counts).
+    let mut echoed = Vec::new();
+    let until = deadline(60.0);
+    while echoed.last().and_then(|e: &Value| e["frame"].as_u64()) != Some(FRAMES - 1) {
+        let Some(more) = read_json_lines(&mut echo, 1, 60.0).pop() else {
+            break;
+        };
+        assert!(Instant::now() < until, "slope-echo too slow");
+        echoed.push(more);
+    }
+    let last = echoed.last().expect("an estimate");
+    let dropped = last["dropped_frames"].as_u64().expect("dropped");
+    assert_eq!(echoed.len() as u64 + dropped, FRAMES, "{echoed:?}");
+
+    let mut received = Vec::new();
+    let until = deadline(30.0);
+    while received.len() < echoed.len() {
+        let Some(line) = listener.next(until) else {
+            break;
+        };
+        assert_eq!(line["topic"], "rt/slope/estimate", "{line}");
+        received.push(line["message"].clone());
+    }
+    assert_eq!(
+        received.len(),
+        echoed.len(),
+        "{}\n{}",
+        node.diagnostics(),
+        listener.proc.diagnostics()
+    );
+    for (echo, dds) in echoed.iter().zip(&received) {
+        assert_same_estimate(echo, dds);
+    }
+    let slopes: Vec<f64> = received
+        .iter()
+        .map(|m| m["slope_deg"].as_f64().expect("a slope"))
+        .collect();
+    assert!(slopes.iter().all(|s| (s - 16.0).abs() < 1.0), "{slopes:?}");
+
+    replay.assert_exits_zero_within(Duration::from_secs(30));
+    node.signal(nix::sys::signal::Signal::SIGTERM);
+    node.assert_exits_zero_within(Duration::from_secs(5));
+    // One voice: RustDDS's own log stays out of the node's.
+    let lines = node.stderr_lines().join("\n");
+    assert!(!lines.contains("UDPListener"), "{lines}");
+    assert!(lines.contains("ros2 node stopped"), "{lines}");
+}
+
+/// A subscriber that joins after the estimates were published gets the
+/// last ones at once (transient local, keep last 10).
+#[test]
+fn a_late_subscriber_gets_the_last_estimates() {
+    let Some(python) = venv_python() else {
+        return;
+    };
+    let prefix = unique_prefix("ros2-late");
+    let domain = unique_domain();
+    let _estimator = start_estimator(&prefix, &[]);
+    let mut node = start_node(&prefix, domain, &[]);
+    let mut echo = start_echo(&prefix, 3);
+    let mut replay = replay_frames(&prefix, "ramp16", 5.0, 3, 1);
+    let echoed = read_json_lines(&mut echo, 3, 60.0);
+    replay.assert_exits_zero_within(Duration::from_secs(30));
+    assert!(!echoed.is_empty());
+
+    let mut listener = Listener::start(&python, domain, &[ESTIMATE]);
+    let mut received = listener.wait_matched(&["rt/slope/estimate"], 30.0);
+    let until = deadline(20.0);
+    while received.len() < echoed.len() {
+        let Some(line) = listener.next(until) else {
+            break;
+        };
+        received.push(line);
+    }
+    let frames: Vec<Option<u64>> = received
+        .iter()
+        .map(|l| l["message"]["frame_index"].as_u64())
+        .collect();
+    let expected: Vec<Option<u64>> = echoed.iter().map(|e| e["frame"].as_u64()).collect();
+    assert_eq!(frames, expected, "{}", node.diagnostics());
+}

@@ -1,0 +1,138 @@
+//! The loop ([`run`]): every estimate, surfaces message and health report
+//! of the service prefix published on ROS 2 until a stop.
+
+use std::time::{Duration, Instant};
+
+use ros2_client::dds::Publisher;
+use serde::Serialize;
+use slope_ipc_types::ServiceNames;
+use slope_sensor::ipc::{create_node, EstimateSubscriber};
+use slope_sensor::publish::StopFlag;
+use slope_tools::cli::{node_name, wait_loop, SilenceNote};
+use slope_tools::ros2_messages::SlopeEstimateMsg;
+use slope_tools::service_manager::ServiceManager;
+
+use super::args::Ros2Args;
+use super::participant::Outputs;
+use super::settings::Settings;
+use crate::topics::{resolve, ESTIMATE_TOPIC};
+
+/// What the node published (and dropped: a reliable reader that stopped
+/// acknowledging, a send that failed).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Ros2Stats {
+    pub estimates: u64,
+    pub dropped: u64,
+}
+
+/// Runs the node as a systemd notify daemon until `stop` is set:
+/// `READY=1` once the DDS publishers and the iceoryx2 subscribers exist,
+/// a status line a second, `STATUS=failed: <reason>` before a failed
+/// exit, `STOPPING=1` on the way out.
+pub fn run(args: &Ros2Args, stop: &StopFlag) -> anyhow::Result<Ros2Stats> {
+    let mut manager = ServiceManager::from_env();
+    let result = Settings::of(args).and_then(|settings| serve(&settings, stop, &mut manager));
+    if let Err(err) = &result {
+        manager.status(&format!("failed: {err:#}").replace('\n', " "));
+    }
+    manager.stopping();
+    result
+}
+
+/// The body of [`run`] once the settings are known.
+fn serve(
+    settings: &Settings,
+    stop: &StopFlag,
+    manager: &mut ServiceManager,
+) -> anyhow::Result<Ros2Stats> {
+    if let Some(peers) = &settings.discovery.static_peers {
+        tracing::warn!(peers = %peers, "ROS_STATIC_PEERS is not supported: ignored");
+    }
+    let outputs = Outputs::create(settings)?;
+    let names = ServiceNames::new(settings.service_prefix.clone());
+    let node = create_node(&node_name("slope-ros2"))?;
+    let estimates = EstimateSubscriber::create(&node, &names)?;
+    let discovery = &settings.discovery;
+    tracing::info!(
+        estimates = %names.estimate(),
+        topic = %resolve(&settings.namespace, ESTIMATE_TOPIC),
+        domain_id = discovery.domain_id,
+        discovery = discovery.range.name(),
+        discovery_from = discovery.range_from.unwrap_or("default"),
+        node = %settings.node_name,
+        namespace = %settings.namespace,
+        "ros2 node ready"
+    );
+    manager.ready("waiting for estimates");
+    let mut stats = Ros2Stats::default();
+    let mut silence = SilenceNote::new("estimate", &names.estimate(), "slope-estimator");
+    let mut failures = FailureNote::default();
+    wait_loop(estimates.listener(), stop, || {
+        silence.tick();
+        manager.tick(|| {
+            format!(
+                "{} estimates published, {} dropped",
+                stats.estimates, stats.dropped
+            )
+        });
+        while let Some(estimate) = estimates.receive()? {
+            silence.heard();
+            let message = SlopeEstimateMsg::new(&estimate, &settings.frame_id);
+            if send(&outputs.estimate, message, "an estimate", &mut failures) {
+                stats.estimates += 1;
+            } else {
+                stats.dropped += 1;
+            }
+        }
+        Ok(true)
+    })?;
+    tracing::info!(
+        estimates = stats.estimates,
+        dropped = stats.dropped,
+        "ros2 node stopped"
+    );
+    Ok(stats)
+}
+
+/// Publishes `message` (`what`, for the log); false when DDS refused it
+/// (a full send window to a reader that stopped acknowledging, a socket
+/// error): logged at most once every [`FAILURE_NOTE_EVERY`], the message
+/// dropped, the node going on.
+fn send<M: Serialize>(
+    publisher: &Publisher<M>,
+    message: M,
+    what: &str,
+    failures: &mut FailureNote,
+) -> bool {
+    match publisher.publish(message) {
+        Ok(()) => true,
+        Err(err) => {
+            failures.note(what, &err.to_string());
+            false
+        }
+    }
+}
+
+/// How often a failing publish is logged.
+const FAILURE_NOTE_EVERY: Duration = Duration::from_secs(5);
+
+/// Rate-limits the log of failed publishes.
+#[derive(Debug, Default)]
+struct FailureNote {
+    last: Option<Instant>,
+    since: u64,
+}
+
+impl FailureNote {
+    fn note(&mut self, what: &str, reason: &str) {
+        self.since += 1;
+        if self.last.is_none_or(|t| t.elapsed() >= FAILURE_NOTE_EVERY) {
+            tracing::warn!(
+                dropped = self.since,
+                "cannot publish {what} on ROS 2 (dropped): {reason}"
+            );
+            self.last = Some(Instant::now());
+            self.since = 0;
+        }
+    }
+}

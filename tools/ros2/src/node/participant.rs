@@ -1,0 +1,120 @@
+//! The DDS side: a participant on the settings' domain and interfaces, a
+//! ROS 2 node in its namespace, and one publisher per topic with its QoS
+//! ([`Outputs`]).
+
+use std::net::{IpAddr, Ipv4Addr};
+use std::time::Duration;
+
+use ros2_client::dds::rustdds::DomainParticipantBuilder;
+use ros2_client::dds::{Context, Node, Publisher};
+use ros2_client::qos::{Durability, History, QosProfile, WhenFull};
+use ros2_client::{MessageTypeName, Name, NodeName, NodeOptions};
+use serde::Serialize;
+use slope_tools::ros2_messages::SlopeEstimateMsg;
+
+use super::settings::Settings;
+use crate::discovery::DiscoveryRange;
+use crate::topics::{resolve, MessageType, ESTIMATE_TOPIC, SLOPE_ESTIMATE};
+
+/// How long a reliable publish may wait for room in the send window (a
+/// reader that stopped acknowledging) before that message is dropped:
+/// short, so that one stuck reader cannot hold up the others' topics.
+const RELIABLE_WAIT: Duration = Duration::from_millis(50);
+
+/// Messages a reliable topic keeps for readers that are behind or late.
+const KEEP_LAST: usize = 10;
+
+/// reliable, keep last 10, transient local: a late joiner (a planner
+/// started after us, `ros2 topic echo`) gets the last 10 at once; volatile
+/// readers match as well.
+fn latched() -> QosProfile {
+    QosProfile::publisher_default()
+        .reliability_reliable(WhenFull::Wait(RELIABLE_WAIT))
+        .durability(Durability::TransientLocal)
+        .history(History::KeepLast { depth: KEEP_LAST })
+}
+
+/// The ROS 2 publishers of the node.
+pub struct Outputs {
+    pub estimate: Publisher<SlopeEstimateMsg>,
+    /// Kept for the publishers' lifetime, dropped after them (fields drop
+    /// in order): the node's participant ends with it.
+    _node: Node,
+}
+
+impl Outputs {
+    /// Joins the settings' DDS domain and creates the node and its
+    /// publishers.
+    pub fn create(settings: &Settings) -> anyhow::Result<Self> {
+        let context = context(settings)?;
+        let name = NodeName::new(&settings.namespace, &settings.node_name).map_err(|e| {
+            anyhow::anyhow!(
+                "cannot name the ROS 2 node {} in {}: {e:?}",
+                settings.node_name,
+                settings.namespace
+            )
+        })?;
+        // No rosout (the log goes to stderr and the journal: one voice),
+        // no parameter services (no spinner runs them; every setting is a
+        // flag or a key of the config file).
+        let options = NodeOptions::new()
+            .enable_rosout(false)
+            .start_parameter_services(false);
+        let mut node = context
+            .new_node(name, options)
+            .map_err(|e| anyhow::anyhow!("cannot create the ROS 2 node: {e:?}"))?;
+        let estimate = publisher(
+            &mut node,
+            &settings.namespace,
+            ESTIMATE_TOPIC,
+            SLOPE_ESTIMATE,
+            latched(),
+        )?;
+        Ok(Self {
+            estimate,
+            _node: node,
+        })
+    }
+}
+
+/// The participant: the settings' domain; with a localhost range, the
+/// loopback interface only (RustDDS then announces itself to this host's
+/// well-known discovery ports, by unicast: the loopback has no multicast).
+fn context(settings: &Settings) -> anyhow::Result<Context> {
+    let discovery = &settings.discovery;
+    let mut builder = DomainParticipantBuilder::new(discovery.domain_id);
+    if discovery.range == DiscoveryRange::Localhost {
+        builder = builder.with_only_networks([IpAddr::V4(Ipv4Addr::LOCALHOST)]);
+    }
+    let participant = builder.build().map_err(|e| {
+        anyhow::anyhow!(
+            "cannot join DDS domain {} ({} discovery): {e:?}",
+            discovery.domain_id,
+            discovery.range.name()
+        )
+    })?;
+    Context::from_domain_participant(participant)
+        .map_err(|e| anyhow::anyhow!("cannot start ROS 2 on the DDS participant: {e:?}"))
+}
+
+/// A publisher of `ty` on `topic` (resolved in `namespace`) with `qos`.
+fn publisher<M: Serialize>(
+    node: &mut Node,
+    namespace: &str,
+    topic: &str,
+    ty: MessageType,
+    qos: QosProfile,
+) -> anyhow::Result<Publisher<M>> {
+    let full = resolve(namespace, topic);
+    let (parent, base) = full
+        .rsplit_once('/')
+        .ok_or_else(|| anyhow::anyhow!("topic {full} has no /"))?;
+    let parent = if parent.is_empty() { "/" } else { parent };
+    let name = Name::new(parent, base)
+        .map_err(|e| anyhow::anyhow!("{full} is no ROS 2 topic name: {e:?}"))?;
+    let topic = node
+        .create_topic(&name, MessageTypeName::new(ty.package, ty.name), &qos)
+        .map_err(|e| anyhow::anyhow!("cannot create the topic {full}: {e:?}"))?;
+    node.create_publisher(&topic, Some(qos))
+        .map_err(|e| anyhow::anyhow!("cannot publish on {full}: {e:?}"))
+}
