@@ -23,7 +23,9 @@ use slope_integration_tests::{
     deadline, read_json_lines, replay_frames, repo_root, start_echo, start_estimator,
     unique_prefix, Proc,
 };
-use slope_ipc_types::{confidence, EstimateStatus, SlopeMethod};
+use slope_ipc_types::{
+    confidence, surface_flags, EstimateStatus, SlopeMethod, SurfaceRole, SurfaceSupport, NO_SURFACE,
+};
 
 const REQUIRE_PYTHON_ENV: &str = "SLOPE_REQUIRE_PYTHON";
 /// Frames replayed in a test.
@@ -258,6 +260,154 @@ fn assert_same_estimate(echo: &Value, dds: &Value) {
 }
 
 const ESTIMATE: &str = "rt/slope/estimate:SlopeEstimate:reliable:transient_local";
+const SURFACES: &str = "rt/slope/surfaces:Surfaces:reliable:transient_local";
+
+/// `slope-echo --surfaces --json` under `prefix` for `count` frames, once
+/// subscribed.
+fn start_surfaces_echo(prefix: &str, count: u64) -> Proc {
+    let count = count.to_string();
+    Proc::spawn(
+        "slope-echo",
+        [
+            "--surfaces",
+            "--json",
+            "--service-prefix",
+            prefix,
+            "--count",
+            &count,
+            "--timeout-s",
+            "120",
+        ],
+    )
+    .assert_ready("subscribed to surfaces")
+}
+
+fn name_of<T: Copy>(
+    all: &[T],
+    raw: &Value,
+    to_raw: fn(T) -> u64,
+    name: fn(T) -> &'static str,
+) -> &'static str {
+    all.iter()
+        .find(|x| Some(to_raw(**x)) == raw.as_u64())
+        .map_or("unknown", |x| name(*x))
+}
+
+/// Every value of `slope-echo --surfaces --json`'s frame `echo` in the
+/// DDS message `dds`.
+fn assert_same_surfaces(echo: &Value, dds: &Value) {
+    let frame = echo["frame"].as_u64().expect("frame");
+    for (echo_key, dds_key) in [
+        ("frame", "frame_index"),
+        ("timestamp_ns", "capture_stamp_ns"),
+        ("publish_stamp_ns", "publish_stamp_ns"),
+        ("source_stamp_ns", "source_stamp_ns"),
+        ("up", "up"),
+        ("forward", "forward"),
+        ("ground_plane", "ground_plane"),
+        ("corridor_half_width_m", "corridor_half_width_m"),
+        ("look_ahead_m", "look_ahead_m"),
+    ] {
+        same_number(
+            &echo[echo_key],
+            &dds[dds_key],
+            &format!("frame {frame} {echo_key}"),
+        );
+    }
+    let status = name_of(
+        &EstimateStatus::ALL,
+        &dds["status"],
+        |s| s as u64,
+        EstimateStatus::name,
+    );
+    assert_eq!(echo["status"], status);
+    let road = dds["road"].as_u64().filter(|r| *r != u64::from(NO_SURFACE));
+    assert_eq!(echo["road"].as_u64(), road, "frame {frame} road");
+    assert_eq!(
+        echo["ground_from_mount"].as_bool(),
+        Some(dds["ground_from_mount"] == 1)
+    );
+    let echoed = echo["surfaces"].as_array().expect("surfaces");
+    let sent = dds["surfaces"].as_array().expect("surfaces");
+    assert_eq!(echoed.len(), sent.len(), "frame {frame}: surfaces");
+    for (k, (e, d)) in echoed.iter().zip(sent).enumerate() {
+        let what = |key: &str| format!("frame {frame} surface {k} {key}");
+        for key in [
+            "inliers",
+            "segments",
+            "slope_deg",
+            "heading_deg",
+            "distance_m",
+            "far_m",
+            "left_m",
+            "right_m",
+            "lowest_m",
+            "highest_m",
+            "area_m2",
+            "rms_m",
+            "noise_ratio",
+        ] {
+            same_number(&e[key], &d[key], &what(key));
+        }
+        let role = name_of(
+            &SurfaceRole::ALL,
+            &d["role"],
+            |r| r as u64,
+            SurfaceRole::name,
+        );
+        assert_eq!(e["role"], role, "{}", what("role"));
+        let support = name_of(
+            &SurfaceSupport::ALL,
+            &d["support"],
+            |s| s as u64,
+            SurfaceSupport::name,
+        );
+        assert_eq!(e["support"], support, "{}", what("support"));
+        let by = d["supported_by"]
+            .as_u64()
+            .filter(|b| *b != u64::from(NO_SURFACE));
+        assert_eq!(e["supported_by"].as_u64(), by, "{}", what("supported_by"));
+        assert_eq!(e["road"].as_bool(), Some(road == Some(k as u64)));
+        let flags = d["flags"].as_u64().expect("flags");
+        for (key, bit) in [
+            ("in_corridor", surface_flags::IN_CORRIDOR),
+            ("measurable", surface_flags::MEASURABLE),
+            ("joins_ground", surface_flags::JOINS_GROUND),
+        ] {
+            assert_eq!(
+                e[key].as_bool(),
+                Some(flags & u64::from(bit) != 0),
+                "{}",
+                what(key)
+            );
+        }
+        // A plane that is all zero is no plane (null in the echo).
+        let plane = d["plane"].clone();
+        let zero = plane == serde_json::json!([0.0, 0.0, 0.0, 0.0]);
+        same_number(
+            &e["plane"],
+            if zero { &Value::Null } else { &plane },
+            &what("plane"),
+        );
+        // float32 corners: slope-echo prints them as f32, Python as the
+        // f64 of the same f32.
+        let as_f32 = |v: &Value| v.as_f64().map(|x| x as f32);
+        let corners: Vec<[Option<f32>; 3]> = d["outline"]
+            .as_array()
+            .expect("outline")
+            .iter()
+            .map(|p| [as_f32(&p["x"]), as_f32(&p["y"]), as_f32(&p["z"])])
+            .collect();
+        let echoed: Vec<[Option<f32>; 3]> = e["outline"]
+            .as_array()
+            .expect("outline")
+            .iter()
+            .map(|p| [as_f32(&p[0]), as_f32(&p[1]), as_f32(&p[2])])
+            .collect();
+        assert_eq!(echoed, corners, "{}", what("outline"));
+    }
+    assert_eq!(dds["header"]["frame_id"], "slope_camera");
+}
 
 #[test]
 fn every_estimate_reaches_cyclone_dds_in_order_with_the_values_echo_shows() {
@@ -269,8 +419,9 @@ fn every_estimate_reaches_cyclone_dds_in_order_with_the_values_echo_shows() {
     let _estimator = start_estimator(&prefix, &["--health-interval-s", "0.2"]);
     let mut node = start_node(&prefix, domain, &[]);
     let mut echo = start_echo(&prefix, FRAMES as usize);
-    let mut listener = Listener::start(&python, domain, &[ESTIMATE]);
-    let early = listener.wait_matched(&["rt/slope/estimate"], 30.0);
+    let mut surfaces_echo = start_surfaces_echo(&prefix, FRAMES);
+    let mut listener = Listener::start(&python, domain, &[ESTIMATE, SURFACES]);
+    let early = listener.wait_matched(&["rt/slope/estimate", "rt/slope/surfaces"], 30.0);
     assert!(early.is_empty(), "samples before any frame: {early:?}");
 
     let mut replay = replay_frames(&prefix, "ramp16", 5.0, FRAMES, 1);
@@ -289,14 +440,19 @@ fn every_estimate_reaches_cyclone_dds_in_order_with_the_values_echo_shows() {
     let dropped = last["dropped_frames"].as_u64().expect("dropped");
     assert_eq!(echoed.len() as u64 + dropped, FRAMES, "{echoed:?}");
 
+    let echoed_surfaces = read_json_lines(&mut surfaces_echo, echoed.len(), 30.0);
     let mut received = Vec::new();
+    let mut surfaces = Vec::new();
     let until = deadline(30.0);
-    while received.len() < echoed.len() {
+    while received.len() < echoed.len() || surfaces.len() < echoed_surfaces.len() {
         let Some(line) = listener.next(until) else {
             break;
         };
-        assert_eq!(line["topic"], "rt/slope/estimate", "{line}");
-        received.push(line["message"].clone());
+        match line["topic"].as_str() {
+            Some("rt/slope/estimate") => received.push(line["message"].clone()),
+            Some("rt/slope/surfaces") => surfaces.push(line["message"].clone()),
+            _ => panic!("unexpected {line}"),
+        }
     }
     assert_eq!(
         received.len(),
@@ -307,6 +463,25 @@ fn every_estimate_reaches_cyclone_dds_in_order_with_the_values_echo_shows() {
     );
     for (echo, dds) in echoed.iter().zip(&received) {
         assert_same_estimate(echo, dds);
+    }
+    // Each estimate's surfaces, in order, as slope-echo --surfaces shows
+    // them; the road a ramp.
+    assert_eq!(echoed_surfaces.len(), echoed.len(), "{echoed_surfaces:?}");
+    assert_eq!(
+        surfaces.len(),
+        echoed_surfaces.len(),
+        "{}",
+        node.diagnostics()
+    );
+    for ((echo, dds), estimate) in echoed_surfaces.iter().zip(&surfaces).zip(&received) {
+        assert_same_surfaces(echo, dds);
+        assert_eq!(dds["frame_index"], estimate["frame_index"]);
+        let road = dds["road"].as_u64().expect("road") as usize;
+        assert_eq!(
+            dds["surfaces"][road]["role"],
+            SurfaceRole::Ramp as u32,
+            "{dds}"
+        );
     }
     let slopes: Vec<f64> = received
         .iter()
@@ -355,4 +530,68 @@ fn a_late_subscriber_gets_the_last_estimates() {
         .collect();
     let expected: Vec<Option<u64>> = echoed.iter().map(|e| e["frame"].as_u64()).collect();
     assert_eq!(frames, expected, "{}", node.diagnostics());
+}
+
+/// `ros2/slope_msgs/msg/*.msg` parse with the `rosbags` message parser and
+/// match, field for field (names, types, array lengths), the IDL types the
+/// Cyclone DDS test decodes with; so do the standard types against rosbags'
+/// ROS 2 Jazzy definitions. A package built with colcon from these files
+/// therefore decodes what slope-ros2 sends.
+#[test]
+fn the_msg_files_parse_with_rosbags_and_match_the_idl_field_for_field() {
+    let Some(python) = venv_python() else {
+        return;
+    };
+    let script = repo_root().join("tests/python/ros2_msgs_check.py");
+    let out = Command::new(&python)
+        .arg(&script)
+        .arg(repo_root().join("ros2/slope_msgs/msg"))
+        .env("PYTHONPATH", repo_root().join("tests/python"))
+        .output()
+        .expect("run ros2_msgs_check.py");
+    assert!(
+        out.status.success(),
+        "ros2_msgs_check.py failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(
+        report["_msg_files"],
+        serde_json::json!([
+            "slope_msgs/msg/SlopeEstimate",
+            "slope_msgs/msg/Surface",
+            "slope_msgs/msg/Surfaces"
+        ])
+    );
+    let types = report.as_object().expect("object");
+    for name in [
+        "slope_msgs/msg/SlopeEstimate",
+        "slope_msgs/msg/Surfaces",
+        "slope_msgs/msg/Surface",
+        "diagnostic_msgs/msg/DiagnosticArray",
+        "diagnostic_msgs/msg/DiagnosticStatus",
+        "visualization_msgs/msg/MarkerArray",
+        "visualization_msgs/msg/Marker",
+        "tf2_msgs/msg/TFMessage",
+    ] {
+        assert!(types.contains_key(name), "{name} is not checked");
+    }
+    for (name, check) in types.iter().filter(|(n, _)| !n.starts_with('_')) {
+        assert_eq!(check["idl"], check["msg"], "{name}: IDL against .msg");
+        assert!(
+            !check["msg"].as_array().expect("fields").is_empty(),
+            "{name}"
+        );
+    }
+    let estimate = &report["slope_msgs/msg/SlopeEstimate"]["msg"];
+    assert_eq!(
+        estimate[0],
+        serde_json::json!(["header", "std_msgs/msg/Header"])
+    );
+    assert_eq!(
+        report["slope_msgs/msg/Surfaces"]["msg"]
+            .as_array()
+            .and_then(|f| f.last()),
+        Some(&serde_json::json!(["surfaces", "slope_msgs/msg/Surface[]"]))
+    );
 }

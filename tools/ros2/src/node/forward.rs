@@ -6,7 +6,7 @@ use std::time::{Duration, Instant};
 use ros2_client::dds::Publisher;
 use serde::Serialize;
 use slope_ipc_types::ServiceNames;
-use slope_sensor::ipc::{create_node, EstimateSubscriber};
+use slope_sensor::ipc::{create_node, EstimateSubscriber, SurfacesSubscriber};
 use slope_sensor::publish::StopFlag;
 use slope_tools::cli::{node_name, wait_loop, SilenceNote};
 use slope_tools::ros2_messages::SlopeEstimateMsg;
@@ -15,6 +15,7 @@ use slope_tools::service_manager::ServiceManager;
 use super::args::Ros2Args;
 use super::participant::Outputs;
 use super::settings::Settings;
+use crate::surfaces_msg::SurfacesMsg;
 use crate::topics::{resolve, ESTIMATE_TOPIC};
 
 /// What the node published (and dropped: a reliable reader that stopped
@@ -22,6 +23,7 @@ use crate::topics::{resolve, ESTIMATE_TOPIC};
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Ros2Stats {
     pub estimates: u64,
+    pub surfaces: u64,
     pub dropped: u64,
 }
 
@@ -52,6 +54,7 @@ fn serve(
     let names = ServiceNames::new(settings.service_prefix.clone());
     let node = create_node(&node_name("slope-ros2"))?;
     let estimates = EstimateSubscriber::create(&node, &names)?;
+    let surfaces = SurfacesSubscriber::create(&node, &names)?;
     let discovery = &settings.discovery;
     tracing::info!(
         estimates = %names.estimate(),
@@ -84,10 +87,21 @@ fn serve(
                 stats.dropped += 1;
             }
         }
+        // A frame's surfaces follow its estimate: those not here yet go
+        // on the next wake (at most 100 ms later).
+        while let Some(frame) = surfaces.receive()? {
+            let message = SurfacesMsg::new(&frame, &settings.frame_id);
+            if send(&outputs.surfaces, message, "the surfaces", &mut failures) {
+                stats.surfaces += 1;
+            } else {
+                stats.dropped += 1;
+            }
+        }
         Ok(true)
     })?;
     tracing::info!(
         estimates = stats.estimates,
+        surfaces = stats.surfaces,
         dropped = stats.dropped,
         "ros2 node stopped"
     );

@@ -14,7 +14,10 @@ use slope_tools::ros2_messages::SlopeEstimateMsg;
 
 use super::settings::Settings;
 use crate::discovery::DiscoveryRange;
-use crate::topics::{resolve, MessageType, ESTIMATE_TOPIC, SLOPE_ESTIMATE};
+use crate::surfaces_msg::SurfacesMsg;
+use crate::topics::{
+    resolve, MessageType, ESTIMATE_TOPIC, SLOPE_ESTIMATE, SURFACES, SURFACES_TOPIC,
+};
 
 /// How long a reliable publish may wait for room in the send window (a
 /// reader that stopped acknowledging) before that message is dropped:
@@ -37,6 +40,7 @@ fn latched() -> QosProfile {
 /// The ROS 2 publishers of the node.
 pub struct Outputs {
     pub estimate: Publisher<SlopeEstimateMsg>,
+    pub surfaces: Publisher<SurfacesMsg>,
     /// Kept for the publishers' lifetime, dropped after them (fields drop
     /// in order): the node's participant ends with it.
     _node: Node,
@@ -70,8 +74,16 @@ impl Outputs {
             SLOPE_ESTIMATE,
             latched(),
         )?;
+        let surfaces = publisher(
+            &mut node,
+            &settings.namespace,
+            SURFACES_TOPIC,
+            SURFACES,
+            latched(),
+        )?;
         Ok(Self {
             estimate,
+            surfaces,
             _node: node,
         })
     }
