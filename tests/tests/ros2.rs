@@ -595,3 +595,159 @@ fn the_msg_files_parse_with_rosbags_and_match_the_idl_field_for_field() {
         Some(&serde_json::json!(["surfaces", "slope_msgs/msg/Surface[]"]))
     );
 }
+
+const DIAGNOSTICS: &str = "rt/diagnostics:DiagnosticArray:reliable:volatile";
+
+/// The value of `key` in a `DiagnosticStatus`'s key/values.
+fn diagnostic_value<'a>(status: &'a Value, key: &str) -> Option<&'a str> {
+    status["values"]
+        .as_array()?
+        .iter()
+        .find(|kv| kv["key"] == key)?["value"]
+        .as_str()
+}
+
+/// A figure of `slope-echo --health --json` (`null`: NaN) against the
+/// diagnostic's text of it.
+fn same_figure(echo: &Value, text: Option<&str>, what: &str) {
+    let text = text.unwrap_or_else(|| panic!("{what}: no key/value"));
+    match echo.as_f64() {
+        Some(expected) => {
+            let sent: f64 = text
+                .parse()
+                .unwrap_or_else(|e| panic!("{what}: {text}: {e}"));
+            // serde_json's float parsing (without `float_roundtrip`) may be
+            // a unit in the last place off Rust's.
+            let ulp = (expected.abs() * f64::EPSILON).max(f64::MIN_POSITIVE);
+            assert!(
+                (sent - expected).abs() <= 2.0 * ulp,
+                "{what}: sent {sent}, slope-echo {expected}"
+            );
+        }
+        None => assert_eq!(text, "NaN", "{what}"),
+    }
+}
+
+/// Every health report of the estimator (every 0.2 s) reaches
+/// `/diagnostics` once, stamped as the report, its figures as key/values,
+/// WARN "no clouds" while idle and OK while frames come: the stamps of
+/// the diagnostics are the reports', so they come at the health rate.
+#[test]
+fn every_health_report_becomes_a_diagnostic_at_the_health_rate() {
+    let Some(python) = venv_python() else {
+        return;
+    };
+    let prefix = unique_prefix("ros2-diag");
+    let domain = unique_domain();
+    let _estimator = start_estimator(&prefix, &["--health-interval-s", "0.2"]);
+    let mut node = start_node(&prefix, domain, &[]);
+    let mut listener = Listener::start(&python, domain, &[DIAGNOSTICS]);
+    let mut received = listener.wait_matched(&["rt/diagnostics"], 30.0);
+    let reports = 16;
+    let mut health = Proc::spawn(
+        "slope-echo",
+        [
+            "--health",
+            "--json",
+            "--service-prefix",
+            &prefix,
+            "--count",
+            &reports.to_string(),
+            "--timeout-s",
+            "60",
+        ],
+    )
+    .assert_ready("subscribed to health reports");
+    // Idle reports first, then reports over frames.
+    let mut echoed = read_json_lines(&mut health, 3, 30.0);
+    let mut replay = replay_frames(&prefix, "ramp16", 5.0, 10, 1);
+    echoed.extend(read_json_lines(&mut health, reports - 3, 30.0));
+    assert_eq!(echoed.len(), reports, "{echoed:?}");
+    replay.assert_exits_zero_within(Duration::from_secs(30));
+
+    let stamp_of = |m: &Value| {
+        let stamp = &m["header"]["stamp"];
+        stamp["sec"].as_u64().expect("sec") * 1_000_000_000 + stamp["nanosec"].as_u64().expect("ns")
+    };
+    let last_stamp = echoed
+        .last()
+        .and_then(|r| r["stamp_ns"].as_u64())
+        .expect("stamp");
+    let until = deadline(20.0);
+    while received
+        .last()
+        .is_none_or(|l| stamp_of(&l["message"]) < last_stamp)
+    {
+        let Some(line) = listener.next(until) else {
+            break;
+        };
+        assert_eq!(line["topic"], "rt/diagnostics", "{line}");
+        received.push(line);
+    }
+    let diagnostics: Vec<&Value> = received.iter().map(|l| &l["message"]).collect();
+    let mut levels = Vec::new();
+    for report in &echoed {
+        let stamp = report["stamp_ns"].as_u64().expect("stamp");
+        let matching: Vec<&&Value> = diagnostics
+            .iter()
+            .filter(|d| stamp_of(d) == stamp)
+            .collect();
+        assert_eq!(
+            matching.len(),
+            1,
+            "report at {stamp}: {}",
+            node.diagnostics()
+        );
+        let status = &matching[0]["status"][0];
+        assert_eq!(status["name"], "slope_ros2: estimator", "{status}");
+        assert_eq!(status["hardware_id"].as_str(), Some(prefix.as_str()));
+        for key in [
+            "pid",
+            "frames_in",
+            "frames_out",
+            "frames_dropped",
+            "errors",
+            "rate_in_hz",
+            "rate_out_hz",
+            "window_ms",
+            "uptime_ms",
+        ] {
+            same_figure(&report[key], diagnostic_value(status, key), key);
+        }
+        for figure in ["median_ms", "p95_ms", "max_ms", "count"] {
+            let key = format!("latency.{figure}");
+            same_figure(
+                &report["latency"][figure],
+                diagnostic_value(status, &key),
+                &key,
+            );
+        }
+        for stage in report["stages"].as_array().expect("stages") {
+            let name = stage["name"].as_str().expect("name");
+            let key = format!("{name}.median_ms");
+            same_figure(&stage["median_ms"], diagnostic_value(status, &key), &key);
+        }
+        // The rule: no error here; idle is WARN, frames coming in OK.
+        assert_eq!(report["errors"], 0, "{report}");
+        let level = status["level"].as_u64().expect("level");
+        if report["rate_in_hz"].as_f64() == Some(0.0) {
+            assert_eq!(level, 1, "{status}");
+            assert!(status["message"]
+                .as_str()
+                .is_some_and(|m| m.starts_with("no clouds")));
+        } else if report["frames_dropped"] == 0 {
+            assert_eq!(level, 0, "{status}");
+        }
+        levels.push(level);
+    }
+    assert!(levels.contains(&0) && levels.contains(&1), "{levels:?}");
+    // At the health rate: one diagnostic per report, 0.2 s apart.
+    let stamps: Vec<u64> = diagnostics.iter().map(|d| stamp_of(d)).collect();
+    let mut gaps: Vec<u64> = stamps.windows(2).map(|w| w[1] - w[0]).collect();
+    gaps.sort_unstable();
+    let median_s = gaps[gaps.len() / 2] as f64 / 1e9;
+    assert!(
+        (0.15..0.3).contains(&median_s),
+        "median gap {median_s} s: {stamps:?}"
+    );
+}

@@ -6,12 +6,14 @@
 //! functions, tested without DDS); the node itself is behind the `ros2`
 //! feature:
 //! - [`topics`]: the ROS 2 topic and type names, the node's default names;
+//! - [`diagnostics`]: `/diagnostics` of a health report, the level rule;
 //! - [`surfaces_msg`]: `slope_msgs/msg/Surfaces` of a `Surfaces`;
 //! - [`discovery`]: ROS 2's discovery settings (`ROS_DOMAIN_ID`,
 //!   `ROS_AUTOMATIC_DISCOVERY_RANGE`, `ROS_LOCALHOST_ONLY`) read and checked;
 //! - `node` (feature `ros2`): the flags, the DDS participant and its
 //!   publishers, the loop from iceoryx2 to DDS.
 
+pub mod diagnostics;
 pub mod discovery;
 pub mod surfaces_msg;
 pub mod topics;

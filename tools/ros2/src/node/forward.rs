@@ -6,7 +6,7 @@ use std::time::{Duration, Instant};
 use ros2_client::dds::Publisher;
 use serde::Serialize;
 use slope_ipc_types::ServiceNames;
-use slope_sensor::ipc::{create_node, EstimateSubscriber, SurfacesSubscriber};
+use slope_sensor::ipc::{create_node, EstimateSubscriber, HealthSubscriber, SurfacesSubscriber};
 use slope_sensor::publish::StopFlag;
 use slope_tools::cli::{node_name, wait_loop, SilenceNote};
 use slope_tools::ros2_messages::SlopeEstimateMsg;
@@ -15,6 +15,7 @@ use slope_tools::service_manager::ServiceManager;
 use super::args::Ros2Args;
 use super::participant::Outputs;
 use super::settings::Settings;
+use crate::diagnostics::DiagnosticsRule;
 use crate::surfaces_msg::SurfacesMsg;
 use crate::topics::{resolve, ESTIMATE_TOPIC};
 
@@ -24,6 +25,7 @@ use crate::topics::{resolve, ESTIMATE_TOPIC};
 pub struct Ros2Stats {
     pub estimates: u64,
     pub surfaces: u64,
+    pub diagnostics: u64,
     pub dropped: u64,
 }
 
@@ -55,6 +57,8 @@ fn serve(
     let node = create_node(&node_name("slope-ros2"))?;
     let estimates = EstimateSubscriber::create(&node, &names)?;
     let surfaces = SurfacesSubscriber::create(&node, &names)?;
+    let health = HealthSubscriber::create(&node, &names)?;
+    let mut rule = DiagnosticsRule::new(&settings.node_name, &settings.service_prefix);
     let discovery = &settings.discovery;
     tracing::info!(
         estimates = %names.estimate(),
@@ -97,11 +101,21 @@ fn serve(
                 stats.dropped += 1;
             }
         }
+        // Reports come about once a second: looked at on every wake.
+        while let Some(report) = health.receive()? {
+            let message = rule.array(&report);
+            if send(&outputs.diagnostics, message, "a diagnostic", &mut failures) {
+                stats.diagnostics += 1;
+            } else {
+                stats.dropped += 1;
+            }
+        }
         Ok(true)
     })?;
     tracing::info!(
         estimates = stats.estimates,
         surfaces = stats.surfaces,
+        diagnostics = stats.diagnostics,
         dropped = stats.dropped,
         "ros2 node stopped"
     );

@@ -13,10 +13,12 @@ use serde::Serialize;
 use slope_tools::ros2_messages::SlopeEstimateMsg;
 
 use super::settings::Settings;
+use crate::diagnostics::DiagnosticArray;
 use crate::discovery::DiscoveryRange;
 use crate::surfaces_msg::SurfacesMsg;
 use crate::topics::{
-    resolve, MessageType, ESTIMATE_TOPIC, SLOPE_ESTIMATE, SURFACES, SURFACES_TOPIC,
+    resolve, MessageType, DIAGNOSTICS_TOPIC, DIAGNOSTIC_ARRAY, ESTIMATE_TOPIC, SLOPE_ESTIMATE,
+    SURFACES, SURFACES_TOPIC,
 };
 
 /// How long a reliable publish may wait for room in the send window (a
@@ -37,10 +39,20 @@ fn latched() -> QosProfile {
         .history(History::KeepLast { depth: KEEP_LAST })
 }
 
+/// reliable, keep last 10, volatile: what `diagnostic_updater` offers and
+/// `diagnostic_aggregator` asks for.
+fn reliable() -> QosProfile {
+    QosProfile::publisher_default()
+        .reliability_reliable(WhenFull::Wait(RELIABLE_WAIT))
+        .durability(Durability::Volatile)
+        .history(History::KeepLast { depth: KEEP_LAST })
+}
+
 /// The ROS 2 publishers of the node.
 pub struct Outputs {
     pub estimate: Publisher<SlopeEstimateMsg>,
     pub surfaces: Publisher<SurfacesMsg>,
+    pub diagnostics: Publisher<DiagnosticArray>,
     /// Kept for the publishers' lifetime, dropped after them (fields drop
     /// in order): the node's participant ends with it.
     _node: Node,
@@ -81,9 +93,17 @@ impl Outputs {
             SURFACES,
             latched(),
         )?;
+        let diagnostics = publisher(
+            &mut node,
+            &settings.namespace,
+            DIAGNOSTICS_TOPIC,
+            DIAGNOSTIC_ARRAY,
+            reliable(),
+        )?;
         Ok(Self {
             estimate,
             surfaces,
+            diagnostics,
             _node: node,
         })
     }
