@@ -261,6 +261,99 @@ fn assert_same_estimate(echo: &Value, dds: &Value) {
 
 const ESTIMATE: &str = "rt/slope/estimate:SlopeEstimate:reliable:transient_local";
 const SURFACES: &str = "rt/slope/surfaces:Surfaces:reliable:transient_local";
+const MARKERS: &str = "rt/slope/markers:MarkerArray:best_effort:volatile";
+
+/// The overlay's role colours (tools/cli/src/render.rs) as ROS's floats.
+fn role_rgb(role: u64) -> [f64; 3] {
+    const ROLE_COLOURS: [[u8; 3]; 6] = [
+        [220, 40, 40],
+        [225, 130, 0],
+        [30, 80, 255],
+        [140, 75, 30],
+        [0, 145, 135],
+        [110, 60, 170],
+    ];
+    ROLE_COLOURS[role as usize].map(|c| f64::from(f32::from(c) / 255.0))
+}
+
+/// A frame's markers against its surfaces and estimate: a DELETEALL, a
+/// filled polygon per surface (its outline's corners, its role's colour),
+/// the road outlined (closed), the estimate's slope as text.
+fn assert_markers(array: &Value, surfaces: &Value, estimate: &Value) {
+    let markers = array["markers"].as_array().expect("markers");
+    let sent = surfaces["surfaces"].as_array().expect("surfaces");
+    let road = surfaces["road"].as_u64().expect("road") as usize;
+    assert_eq!(markers.len(), sent.len() + 3, "{array}");
+    assert_eq!(markers[0]["action"], 3, "DELETEALL first");
+    let point = |p: &Value| [p["x"].as_f64(), p["y"].as_f64(), p["z"].as_f64()];
+    for (k, surface) in sent.iter().enumerate() {
+        let m = &markers[k + 1];
+        assert_eq!(
+            (m["ns"].as_str(), m["id"].as_u64()),
+            (Some("surfaces"), Some(k as u64))
+        );
+        assert_eq!(m["type"], 11, "TRIANGLE_LIST");
+        let c: Vec<_> = surface["outline"]
+            .as_array()
+            .expect("outline")
+            .iter()
+            .map(point)
+            .collect();
+        let triangles: Vec<_> = m["points"]
+            .as_array()
+            .expect("points")
+            .iter()
+            .map(point)
+            .collect();
+        assert_eq!(
+            triangles,
+            [c[0], c[1], c[2], c[0], c[2], c[3]],
+            "surface {k}"
+        );
+        let rgb = role_rgb(surface["role"].as_u64().expect("role"));
+        let colour = &m["color"];
+        // float32 in the message: compare as f32.
+        let got = [
+            colour["r"].as_f64(),
+            colour["g"].as_f64(),
+            colour["b"].as_f64(),
+        ]
+        .map(|v| v.map(|v| v as f32));
+        assert_eq!(got, rgb.map(|v| Some(v as f32)), "surface {k} colour");
+    }
+    let outline = &markers[sent.len() + 1];
+    assert_eq!(
+        (outline["ns"].as_str(), outline["type"].as_u64()),
+        (Some("road"), Some(4))
+    );
+    let c: Vec<_> = sent[road]["outline"]
+        .as_array()
+        .expect("outline")
+        .iter()
+        .map(point)
+        .collect();
+    let strip: Vec<_> = outline["points"]
+        .as_array()
+        .expect("points")
+        .iter()
+        .map(point)
+        .collect();
+    assert_eq!(
+        strip,
+        [c[0], c[1], c[2], c[3], c[0]],
+        "the road's outline, closed"
+    );
+    let text = &markers[sent.len() + 2];
+    assert_eq!(text["type"], 9, "TEXT_VIEW_FACING");
+    let slope = estimate["slope_deg"].as_f64().expect("slope");
+    assert_eq!(text["text"], format!("{slope:.1}°"));
+    for m in markers {
+        assert_eq!(
+            m["header"], surfaces["header"],
+            "stamp and frame of the frame"
+        );
+    }
+}
 
 /// `slope-echo --surfaces --json` under `prefix` for `count` frames, once
 /// subscribed.
@@ -420,8 +513,11 @@ fn every_estimate_reaches_cyclone_dds_in_order_with_the_values_echo_shows() {
     let mut node = start_node(&prefix, domain, &[]);
     let mut echo = start_echo(&prefix, FRAMES as usize);
     let mut surfaces_echo = start_surfaces_echo(&prefix, FRAMES);
-    let mut listener = Listener::start(&python, domain, &[ESTIMATE, SURFACES]);
-    let early = listener.wait_matched(&["rt/slope/estimate", "rt/slope/surfaces"], 30.0);
+    let mut listener = Listener::start(&python, domain, &[ESTIMATE, SURFACES, MARKERS]);
+    let early = listener.wait_matched(
+        &["rt/slope/estimate", "rt/slope/surfaces", "rt/slope/markers"],
+        30.0,
+    );
     assert!(early.is_empty(), "samples before any frame: {early:?}");
 
     let mut replay = replay_frames(&prefix, "ramp16", 5.0, FRAMES, 1);
@@ -443,14 +539,19 @@ fn every_estimate_reaches_cyclone_dds_in_order_with_the_values_echo_shows() {
     let echoed_surfaces = read_json_lines(&mut surfaces_echo, echoed.len(), 30.0);
     let mut received = Vec::new();
     let mut surfaces = Vec::new();
+    let mut markers = Vec::new();
     let until = deadline(30.0);
-    while received.len() < echoed.len() || surfaces.len() < echoed_surfaces.len() {
+    while received.len() < echoed.len()
+        || surfaces.len() < echoed_surfaces.len()
+        || markers.len() < echoed_surfaces.len()
+    {
         let Some(line) = listener.next(until) else {
             break;
         };
         match line["topic"].as_str() {
             Some("rt/slope/estimate") => received.push(line["message"].clone()),
             Some("rt/slope/surfaces") => surfaces.push(line["message"].clone()),
+            Some("rt/slope/markers") => markers.push(line["message"].clone()),
             _ => panic!("unexpected {line}"),
         }
     }
@@ -482,6 +583,11 @@ fn every_estimate_reaches_cyclone_dds_in_order_with_the_values_echo_shows() {
             SurfaceRole::Ramp as u32,
             "{dds}"
         );
+    }
+    // Markers for every frame (best effort: none lost on the loopback).
+    assert_eq!(markers.len(), surfaces.len(), "{}", node.diagnostics());
+    for ((array, frame), estimate) in markers.iter().zip(&surfaces).zip(&received) {
+        assert_markers(array, frame, estimate);
     }
     let slopes: Vec<f64> = received
         .iter()

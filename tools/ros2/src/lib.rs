@@ -7,6 +7,7 @@
 //! feature:
 //! - [`topics`]: the ROS 2 topic and type names, the node's default names;
 //! - [`diagnostics`]: `/diagnostics` of a health report, the level rule;
+//! - [`markers`]: the rviz2 markers of a frame;
 //! - [`surfaces_msg`]: `slope_msgs/msg/Surfaces` of a `Surfaces`;
 //! - [`discovery`]: ROS 2's discovery settings (`ROS_DOMAIN_ID`,
 //!   `ROS_AUTOMATIC_DISCOVERY_RANGE`, `ROS_LOCALHOST_ONLY`) read and checked;
@@ -15,6 +16,7 @@
 
 pub mod diagnostics;
 pub mod discovery;
+pub mod markers;
 pub mod surfaces_msg;
 pub mod topics;
 

@@ -16,6 +16,7 @@ use super::args::Ros2Args;
 use super::participant::Outputs;
 use super::settings::Settings;
 use crate::diagnostics::DiagnosticsRule;
+use crate::markers::markers;
 use crate::surfaces_msg::SurfacesMsg;
 use crate::topics::{resolve, ESTIMATE_TOPIC};
 
@@ -26,6 +27,7 @@ pub struct Ros2Stats {
     pub estimates: u64,
     pub surfaces: u64,
     pub diagnostics: u64,
+    pub markers: u64,
     pub dropped: u64,
 }
 
@@ -74,6 +76,9 @@ fn serve(
     let mut stats = Ros2Stats::default();
     let mut silence = SilenceNote::new("estimate", &names.estimate(), "slope-estimator");
     let mut failures = FailureNote::default();
+    // The newest estimate: its frame's surfaces follow it (the markers'
+    // text).
+    let mut last_estimate = None;
     wait_loop(estimates.listener(), stop, || {
         silence.tick();
         manager.tick(|| {
@@ -84,6 +89,7 @@ fn serve(
         });
         while let Some(estimate) = estimates.receive()? {
             silence.heard();
+            last_estimate = Some(estimate);
             let message = SlopeEstimateMsg::new(&estimate, &settings.frame_id);
             if send(&outputs.estimate, message, "an estimate", &mut failures) {
                 stats.estimates += 1;
@@ -94,6 +100,12 @@ fn serve(
         // A frame's surfaces follow its estimate: those not here yet go
         // on the next wake (at most 100 ms later).
         while let Some(frame) = surfaces.receive()? {
+            let array = markers(&frame, last_estimate.as_ref(), &settings.frame_id);
+            if send(&outputs.markers, array, "the markers", &mut failures) {
+                stats.markers += 1;
+            } else {
+                stats.dropped += 1;
+            }
             let message = SurfacesMsg::new(&frame, &settings.frame_id);
             if send(&outputs.surfaces, message, "the surfaces", &mut failures) {
                 stats.surfaces += 1;
@@ -116,6 +128,7 @@ fn serve(
         estimates = stats.estimates,
         surfaces = stats.surfaces,
         diagnostics = stats.diagnostics,
+        markers = stats.markers,
         dropped = stats.dropped,
         "ros2 node stopped"
     );

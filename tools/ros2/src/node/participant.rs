@@ -15,10 +15,11 @@ use slope_tools::ros2_messages::SlopeEstimateMsg;
 use super::settings::Settings;
 use crate::diagnostics::DiagnosticArray;
 use crate::discovery::DiscoveryRange;
+use crate::markers::MarkerArray;
 use crate::surfaces_msg::SurfacesMsg;
 use crate::topics::{
-    resolve, MessageType, DIAGNOSTICS_TOPIC, DIAGNOSTIC_ARRAY, ESTIMATE_TOPIC, SLOPE_ESTIMATE,
-    SURFACES, SURFACES_TOPIC,
+    resolve, MessageType, DIAGNOSTICS_TOPIC, DIAGNOSTIC_ARRAY, ESTIMATE_TOPIC, MARKERS_TOPIC,
+    MARKER_ARRAY, SLOPE_ESTIMATE, SURFACES, SURFACES_TOPIC,
 };
 
 /// How long a reliable publish may wait for room in the send window (a
@@ -48,11 +49,21 @@ fn reliable() -> QosProfile {
         .history(History::KeepLast { depth: KEEP_LAST })
 }
 
+/// best effort, keep last 1, volatile: pictures for rviz2, where a newer
+/// frame makes an older one worthless.
+fn best_effort() -> QosProfile {
+    QosProfile::publisher_default()
+        .reliability_best_effort()
+        .durability(Durability::Volatile)
+        .history(History::KeepLast { depth: 1 })
+}
+
 /// The ROS 2 publishers of the node.
 pub struct Outputs {
     pub estimate: Publisher<SlopeEstimateMsg>,
     pub surfaces: Publisher<SurfacesMsg>,
     pub diagnostics: Publisher<DiagnosticArray>,
+    pub markers: Publisher<MarkerArray>,
     /// Kept for the publishers' lifetime, dropped after them (fields drop
     /// in order): the node's participant ends with it.
     _node: Node,
@@ -100,10 +111,18 @@ impl Outputs {
             DIAGNOSTIC_ARRAY,
             reliable(),
         )?;
+        let markers = publisher(
+            &mut node,
+            &settings.namespace,
+            MARKERS_TOPIC,
+            MARKER_ARRAY,
+            best_effort(),
+        )?;
         Ok(Self {
             estimate,
             surfaces,
             diagnostics,
+            markers,
             _node: node,
         })
     }
