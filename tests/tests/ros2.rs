@@ -857,3 +857,108 @@ fn every_health_report_becomes_a_diagnostic_at_the_health_rate() {
         "median gap {median_s} s: {stamps:?}"
     );
 }
+
+/// `--base-frame base_link` with the config file's `[mount]` (0.5 m up,
+/// pitched -20°, rolled 5°): `/tf_static` holds the camera's pose in
+/// `base_link`, 0.5 m above its origin, and the base's up (z) in the
+/// camera frame, the rotation's last row, is the mount's up vector
+/// `[-sin r cos p, -cos r cos p, sin p]` (the recording format's
+/// definition), also for a listener that joins late (transient local).
+#[test]
+fn the_mount_is_on_tf_static_for_late_listeners() {
+    let Some(python) = venv_python() else {
+        return;
+    };
+    let prefix = unique_prefix("ros2-tf");
+    let domain = unique_domain();
+    let dir = tempfile::tempdir().expect("temp dir");
+    let config = dir.path().join("slope.toml");
+    std::fs::write(
+        &config,
+        "[mount]\nheight_m = 0.5\npitch_deg = -20.0\nroll_deg = 5.0\n[ros2]\nbase_frame = \"base_link\"\n",
+    )
+    .expect("write the config");
+    let config = config.to_str().expect("utf-8").to_string();
+    let _node = start_node(&prefix, domain, &["--config", &config]);
+    let topic = "rt/tf_static:TFMessage:reliable:transient_local";
+    let mut listener = Listener::start(&python, domain, &[topic]);
+    let mut lines = listener.wait_matched(&["rt/tf_static"], 30.0);
+    if lines.is_empty() {
+        lines.extend(listener.next(deadline(20.0)));
+    }
+    assert_eq!(lines.len(), 1, "{lines:?}");
+    let transforms = lines[0]["message"]["transforms"]
+        .as_array()
+        .expect("transforms");
+    assert_eq!(transforms.len(), 1);
+    let t = &transforms[0];
+    assert_eq!(t["header"]["frame_id"], "base_link");
+    assert_eq!(t["child_frame_id"], "slope_camera");
+    let v = &t["transform"]["translation"];
+    assert_eq!(
+        [v["x"].as_f64(), v["y"].as_f64(), v["z"].as_f64()],
+        [Some(0.0), Some(0.0), Some(0.5)]
+    );
+    let q = &t["transform"]["rotation"];
+    let [x, y, z, w] = ["x", "y", "z", "w"].map(|k| q[k].as_f64().expect("quaternion"));
+    assert!((x * x + y * y + z * z + w * w - 1.0).abs() < 1e-9);
+    // The last row of the rotation matrix of (x, y, z, w).
+    let row = [
+        2.0 * (x * z - w * y),
+        2.0 * (y * z + w * x),
+        1.0 - 2.0 * (x * x + y * y),
+    ];
+    let (p, r) = ((-20.0f64).to_radians(), 5.0f64.to_radians());
+    let up = [-r.sin() * p.cos(), -r.cos() * p.cos(), p.sin()];
+    for (got, want) in row.iter().zip(up) {
+        assert!((got - want).abs() < 1e-9, "{row:?} against {up:?}");
+    }
+}
+
+/// Settings refused before anything starts: a `[ros2]` value that is no
+/// ROS 2 name (EX_CONFIG, 78, naming the key), `--base-frame` without a
+/// mount, `ROS_AUTOMATIC_DISCOVERY_RANGE=OFF` (status 1, saying why).
+#[test]
+fn bad_settings_are_refused_with_the_reason() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let bad = dir.path().join("bad.toml");
+    std::fs::write(&bad, "[ros2]\nnamespace = \"robot1\"\n").expect("write");
+    let empty = dir.path().join("empty.toml");
+    std::fs::write(&empty, "").expect("write");
+    let prefix = unique_prefix("ros2-bad");
+    let path = |p: &Path| p.to_str().expect("utf-8").to_string();
+    let cases: [(Vec<String>, &[(&str, &str)], i32, &str); 3] = [
+        (
+            vec!["--config".into(), path(&bad)],
+            &[],
+            78,
+            "`ros2.namespace` = \"robot1\"",
+        ),
+        (
+            vec![
+                "--config".into(),
+                path(&empty),
+                "--base-frame".into(),
+                "base_link".into(),
+            ],
+            &[("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")],
+            1,
+            "--base-frame base_link needs the camera's mount",
+        ),
+        (
+            vec!["--config".into(), path(&empty)],
+            &[("ROS_AUTOMATIC_DISCOVERY_RANGE", "OFF")],
+            1,
+            "ROS_AUTOMATIC_DISCOVERY_RANGE=OFF is not supported",
+        ),
+    ];
+    for (args, env, status, message) in cases {
+        let mut all = vec!["--service-prefix".to_string(), prefix.clone()];
+        all.extend(args);
+        let mut node = Proc::spawn_with_env("slope-ros2", &all, env);
+        let exit = node.wait_exit(deadline(20.0)).expect("it exits");
+        let stderr = node.stderr_lines().join("\n");
+        assert_eq!(exit.code(), Some(status), "{all:?}: {stderr}");
+        assert!(stderr.contains(message), "{all:?}: {stderr}");
+    }
+}

@@ -22,10 +22,7 @@ pub const LOCALHOST_ONLY_ENV: &str = "ROS_LOCALHOST_ONLY";
 /// Peers to reach beyond discovery (not supported here).
 pub const STATIC_PEERS_ENV: &str = "ROS_STATIC_PEERS";
 
-/// The largest domain id: RTPS's port numbers (7400 + 250 * domain + ...)
-/// must stay below 65536 (ROS 2 documents 0-232, 0-101 without clashes
-/// with Linux's ephemeral ports).
-pub const MAX_DOMAIN_ID: u16 = 232;
+pub use slope_tools::ros2_names::MAX_DOMAIN_ID;
 
 /// Which interfaces discovery and data use.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -1,6 +1,7 @@
 //! The ROS 2 names `slope-ros2` publishes under: topics (relative to the
 //! node's namespace, except the global `/diagnostics` and `/tf_static`),
-//! their message types, and the node's default names.
+//! their message types, and the node's default names; the checks of the
+//! names given (`slope_tools::ros2_names`, shared with the config file).
 
 /// The node's name unless `--node-name` says otherwise.
 pub const DEFAULT_NODE_NAME: &str = "slope_ros2";
@@ -61,56 +62,7 @@ pub const TF_MESSAGE: MessageType = MessageType {
     name: "TFMessage",
 };
 
-/// Checks a ROS 2 namespace (`--namespace`): `/`, or `/` followed by
-/// tokens separated by `/`, each starting with a letter or `_` and made
-/// of letters, digits and `_` (no `__`), no trailing `/`.
-pub fn namespace_arg(text: &str) -> Result<String, String> {
-    let expected = "expected / or /NAME[/NAME...] with names of letters, digits and _ \
-                    (starting with a letter or _, no __), e.g. /robot1";
-    if text == "/" {
-        return Ok(text.to_string());
-    }
-    let Some(rest) = text.strip_prefix('/') else {
-        return Err(format!("'{text}' is not a ROS 2 namespace: {expected}"));
-    };
-    if rest.split('/').all(is_name_token) {
-        Ok(text.to_string())
-    } else {
-        Err(format!("'{text}' is not a ROS 2 namespace: {expected}"))
-    }
-}
-
-/// Checks a node name (`--node-name`): one token of letters, digits and
-/// `_`, starting with a letter or `_`.
-pub fn node_name_arg(text: &str) -> Result<String, String> {
-    if is_name_token(text) {
-        Ok(text.to_string())
-    } else {
-        Err(format!(
-            "'{text}' is not a ROS 2 node name: expected letters, digits and _ (starting with a \
-             letter or _, no __), e.g. slope_ros2"
-        ))
-    }
-}
-
-/// Checks a TF frame id (`--frame-id`, `--base-frame`): not empty, no
-/// whitespace, no leading `/` (tf2 refuses it).
-pub fn frame_id_arg(text: &str) -> Result<String, String> {
-    if text.is_empty() || text.starts_with('/') || text.contains(char::is_whitespace) {
-        Err(format!(
-            "'{text}' is not a TF frame id: expected a name without spaces and without a \
-             leading /, e.g. base_link"
-        ))
-    } else {
-        Ok(text.to_string())
-    }
-}
-
-fn is_name_token(token: &str) -> bool {
-    token.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_')
-        && token.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
-        && !token.contains("__")
-}
+pub use slope_tools::ros2_names::{frame_id_arg, namespace_arg, node_name_arg};
 
 /// The absolute topic name of `topic` for a node in `namespace`: a global
 /// topic (`/diagnostics`) as it is, a relative one under the namespace
@@ -147,26 +99,5 @@ mod tests {
         assert_eq!(resolve("/robot1", ESTIMATE_TOPIC), "/robot1/slope/estimate");
         assert_eq!(resolve("/a/b", MARKERS_TOPIC), "/a/b/slope/markers");
         assert_eq!(resolve("/robot1", DIAGNOSTICS_TOPIC), "/diagnostics");
-    }
-
-    #[test]
-    fn names_follow_the_ros_2_rules() {
-        for good in ["/", "/robot1", "/a/b_c", "/_x"] {
-            assert_eq!(namespace_arg(good).as_deref(), Ok(good));
-        }
-        for bad in [
-            "", "robot1", "/robot1/", "//", "/1robot", "/a__b", "/a-b", "/a b",
-        ] {
-            let err = namespace_arg(bad).unwrap_err();
-            assert!(err.contains("not a ROS 2 namespace"), "{bad}: {err}");
-        }
-        assert!(node_name_arg("slope_ros2").is_ok());
-        for bad in ["", "slope-ros2", "2slope", "a/b"] {
-            assert!(node_name_arg(bad).is_err(), "{bad}");
-        }
-        assert!(frame_id_arg("base_link").is_ok());
-        for bad in ["", "/base_link", "base link"] {
-            assert!(frame_id_arg(bad).is_err(), "{bad}");
-        }
     }
 }

@@ -69,6 +69,7 @@ fn serve(
         discovery = discovery.range.name(),
         discovery_from = discovery.range_from.unwrap_or("default"),
         node = %settings.node_name,
+        tf_static = outputs.tf_static.is_some(),
         namespace = %settings.namespace,
         "ros2 node ready"
     );

@@ -10,7 +10,8 @@ use ros2_client::dds::{Context, Node, Publisher};
 use ros2_client::qos::{Durability, History, QosProfile, WhenFull};
 use ros2_client::{MessageTypeName, Name, NodeName, NodeOptions};
 use serde::Serialize;
-use slope_tools::ros2_messages::SlopeEstimateMsg;
+use slope_tools::mount_transform::mount_to_transform;
+use slope_tools::ros2_messages::{Header, SlopeEstimateMsg, TfMessage, Time, TransformStamped};
 
 use super::settings::Settings;
 use crate::diagnostics::DiagnosticArray;
@@ -19,7 +20,7 @@ use crate::markers::MarkerArray;
 use crate::surfaces_msg::SurfacesMsg;
 use crate::topics::{
     resolve, MessageType, DIAGNOSTICS_TOPIC, DIAGNOSTIC_ARRAY, ESTIMATE_TOPIC, MARKERS_TOPIC,
-    MARKER_ARRAY, SLOPE_ESTIMATE, SURFACES, SURFACES_TOPIC,
+    MARKER_ARRAY, SLOPE_ESTIMATE, SURFACES, SURFACES_TOPIC, TF_MESSAGE, TF_STATIC_TOPIC,
 };
 
 /// How long a reliable publish may wait for room in the send window (a
@@ -58,12 +59,21 @@ fn best_effort() -> QosProfile {
         .history(History::KeepLast { depth: 1 })
 }
 
+/// reliable, keep last 1, transient local: what tf2's static broadcaster
+/// offers and its listeners ask for.
+fn tf_static() -> QosProfile {
+    latched().history(History::KeepLast { depth: 1 })
+}
+
 /// The ROS 2 publishers of the node.
 pub struct Outputs {
     pub estimate: Publisher<SlopeEstimateMsg>,
     pub surfaces: Publisher<SurfacesMsg>,
     pub diagnostics: Publisher<DiagnosticArray>,
     pub markers: Publisher<MarkerArray>,
+    /// With `--base-frame`: the mount, published once (transient local:
+    /// every late listener gets it).
+    pub tf_static: Option<Publisher<TfMessage>>,
     /// Kept for the publishers' lifetime, dropped after them (fields drop
     /// in order): the node's participant ends with it.
     _node: Node,
@@ -118,14 +128,55 @@ impl Outputs {
             MARKER_ARRAY,
             best_effort(),
         )?;
+        let tf_static = match &settings.base_frame {
+            Some(base) => {
+                let publisher = publisher(
+                    &mut node,
+                    &settings.namespace,
+                    TF_STATIC_TOPIC,
+                    TF_MESSAGE,
+                    tf_static(),
+                )?;
+                publisher
+                    .publish(mount_message(settings, base)?)
+                    .map_err(|e| anyhow::anyhow!("cannot publish the mount on /tf_static: {e}"))?;
+                Some(publisher)
+            }
+            None => None,
+        };
         Ok(Self {
             estimate,
             surfaces,
             diagnostics,
             markers,
+            tf_static,
             _node: node,
         })
     }
+}
+
+/// `/tf_static`'s message: the camera's optical frame in `base`, from the
+/// config file's `[mount]`, stamped now.
+fn mount_message(settings: &Settings, base: &str) -> anyhow::Result<TfMessage> {
+    let transform = mount_to_transform(&settings.mount).ok_or_else(|| {
+        anyhow::anyhow!(
+            "--base-frame {base} needs the camera's mount: height_m and pitch_deg (roll_deg \
+             optional) in the config file's [mount]"
+        )
+    })?;
+    let now_ns = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| u64::try_from(d.as_nanos()).unwrap_or(u64::MAX));
+    Ok(TfMessage {
+        transforms: vec![TransformStamped {
+            header: Header {
+                stamp: Time::from_ns(now_ns),
+                frame_id: base.to_string(),
+            },
+            child_frame_id: settings.frame_id.clone(),
+            transform,
+        }],
+    })
 }
 
 /// The participant: the settings' domain; with a localhost range, the

@@ -4,13 +4,11 @@
 
 use std::path::Path;
 
-use anyhow::Context;
 use slope_sensor::recording::MountInfo;
 use slope_tools::config_file::{config_path, SlopeFile, DEFAULT_CONFIG_PATH};
 
 use super::args::Ros2Args;
 use crate::discovery::Discovery;
-use crate::topics::{DEFAULT_FRAME_ID, DEFAULT_NODE_NAME};
 
 /// The settings in effect.
 #[derive(Debug, Clone)]
@@ -37,20 +35,17 @@ impl Settings {
     pub fn with_default_file(args: &Ros2Args, default: &Path) -> anyhow::Result<Self> {
         let path = config_path(args.config.as_deref(), default);
         let file = SlopeFile::load(path.as_deref())?;
-        file.validate().context("invalid settings")?;
-        let discovery = Discovery::from_env(args.domain_id)?;
+        // Loading checks every section ([ros2] too): an error names the
+        // file and the key, and the daemon exits with EX_CONFIG (78).
+        let ros2 = file.ros2;
+        let discovery = Discovery::from_env(args.domain_id.or(ros2.domain_id))?;
+        let pick = |flag: &Option<String>, key: String| flag.clone().unwrap_or(key);
         Ok(Self {
             service_prefix: args.common.prefix_or(&file.service_prefix),
-            namespace: args.namespace.clone().unwrap_or_else(|| "/".to_string()),
-            node_name: args
-                .node_name
-                .clone()
-                .unwrap_or_else(|| DEFAULT_NODE_NAME.to_string()),
-            frame_id: args
-                .frame_id
-                .clone()
-                .unwrap_or_else(|| DEFAULT_FRAME_ID.to_string()),
-            base_frame: args.base_frame.clone(),
+            namespace: pick(&args.namespace, ros2.namespace),
+            node_name: pick(&args.node_name, ros2.node_name),
+            frame_id: pick(&args.frame_id, ros2.frame_id),
+            base_frame: args.base_frame.clone().or(ros2.base_frame),
             mount: file.mount,
             discovery,
         })
