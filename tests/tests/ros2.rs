@@ -927,7 +927,9 @@ fn bad_settings_are_refused_with_the_reason() {
     std::fs::write(&empty, "").expect("write");
     let prefix = unique_prefix("ros2-bad");
     let path = |p: &Path| p.to_str().expect("utf-8").to_string();
-    let cases: [(Vec<String>, &[(&str, &str)], i32, &str); 3] = [
+    // (flags, environment, exit status, what stderr says)
+    type Case<'a> = (Vec<String>, &'a [(&'a str, &'a str)], i32, &'a str);
+    let cases: [Case; 3] = [
         (
             vec!["--config".into(), path(&bad)],
             &[],
