@@ -964,3 +964,56 @@ fn bad_settings_are_refused_with_the_reason() {
         assert!(stderr.contains(message), "{all:?}: {stderr}");
     }
 }
+
+/// The unit is `Type=notify`: without systemd, the test binds the socket
+/// systemd would (`NOTIFY_SOCKET`, with a watchdog asked for) and reads
+/// `READY=1`, a watchdog ping, the status line with the counts, and
+/// `STOPPING=1` after SIGTERM, which ends the node with status 0.
+#[test]
+fn the_node_speaks_the_notify_protocol_and_stops_cleanly() {
+    use slope_integration_tests::read_notify_until;
+    use std::os::unix::net::UnixDatagram;
+
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("notify.sock");
+    let socket = UnixDatagram::bind(&path).expect("bind the notify socket");
+    socket
+        .set_read_timeout(Some(Duration::from_millis(100)))
+        .expect("timeout");
+    let prefix = unique_prefix("ros2-notify");
+    let domain = unique_domain().to_string();
+    let mut node = Proc::spawn_with_env(
+        "slope-ros2",
+        ["--service-prefix", &prefix, "--domain-id", &domain],
+        &[
+            ("NOTIFY_SOCKET", path.to_str().expect("utf-8")),
+            ("WATCHDOG_USEC", "400000"),
+            ("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST"),
+        ],
+    );
+    let mut seen = Vec::new();
+    assert!(
+        read_notify_until(&socket, &mut seen, "READY=1", deadline(20.0)),
+        "{seen:?}\n{}",
+        node.diagnostics()
+    );
+    assert!(
+        read_notify_until(&socket, &mut seen, "WATCHDOG=1", deadline(5.0)),
+        "{seen:?}"
+    );
+    assert!(
+        read_notify_until(
+            &socket,
+            &mut seen,
+            "STATUS=0 estimates, 0 surfaces, 0 markers, 0 diagnostics published",
+            deadline(5.0)
+        ),
+        "{seen:?}"
+    );
+    node.signal(nix::sys::signal::Signal::SIGTERM);
+    assert!(
+        read_notify_until(&socket, &mut seen, "STOPPING=1", deadline(5.0)),
+        "{seen:?}"
+    );
+    node.assert_exits_zero_within(Duration::from_secs(5));
+}

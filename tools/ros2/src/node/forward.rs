@@ -84,8 +84,8 @@ fn serve(
         silence.tick();
         manager.tick(|| {
             format!(
-                "{} estimates published, {} dropped",
-                stats.estimates, stats.dropped
+                "{} estimates, {} surfaces, {} markers, {} diagnostics published; {} dropped",
+                stats.estimates, stats.surfaces, stats.markers, stats.diagnostics, stats.dropped
             )
         });
         while let Some(estimate) = estimates.receive()? {
