@@ -1,9 +1,10 @@
 """The .msg files of ros2/slope_msgs parsed by the `rosbags` message parser,
 the standard messages from rosbags' ROS 2 Jazzy type store, and the IDL
 types of ros2_types.py (what the Cyclone DDS test decodes with), as one
-JSON object on stdout: {ROS type: {"idl": [[name, type]...], "msg": [...]}}
-for every type of ros2_types.ALL, so that the test can check them field
-for field.
+JSON object on stdout: {ROS type: {"idl": [[name, type]...], "msg": [...],
+"humble": [...]}} (msg: Jazzy's store, humble: Humble's, each with our .msg
+files) for every type of ros2_types.ALL, so that the test can check them
+field for field.
 
 usage: ros2_msgs_check.py MSG_DIR
 """
@@ -41,13 +42,17 @@ def main():
     for path in sorted(msg_dir.glob("*.msg")):
         ours.update(get_types_from_msg(path.read_text(), f"slope_msgs/msg/{path.stem}"))
     store.register(ours)
+    humble = get_typestore(Stores.ROS2_HUMBLE)
+    humble.register(ours)
     out = {}
     for cls in ros2_types.ALL:
         name = ros2_types.ros_name(cls)
         _, fields = store.fielddefs[name]
+        _, humble_fields = humble.fielddefs[name]
         out[name] = {
             "idl": ros2_types.fields(cls),
             "msg": [[field, type_text(desc)] for field, desc in fields],
+            "humble": [[field, type_text(desc)] for field, desc in humble_fields],
             "ours": name in ours,
         }
     out["_msg_files"] = sorted(ours)

@@ -641,7 +641,7 @@ fn a_late_subscriber_gets_the_last_estimates() {
 /// `ros2/slope_msgs/msg/*.msg` parse with the `rosbags` message parser and
 /// match, field for field (names, types, array lengths), the IDL types the
 /// Cyclone DDS test decodes with; so do the standard types against rosbags'
-/// ROS 2 Jazzy definitions. A package built with colcon from these files
+/// ROS 2 Jazzy and Humble definitions. A package built with colcon from these files
 /// therefore decodes what slope-ros2 sends.
 #[test]
 fn the_msg_files_parse_with_rosbags_and_match_the_idl_field_for_field() {
@@ -684,6 +684,7 @@ fn the_msg_files_parse_with_rosbags_and_match_the_idl_field_for_field() {
     }
     for (name, check) in types.iter().filter(|(n, _)| !n.starts_with('_')) {
         assert_eq!(check["idl"], check["msg"], "{name}: IDL against .msg");
+        assert_eq!(check["idl"], check["humble"], "{name}: IDL against Humble's");
         assert!(
             !check["msg"].as_array().expect("fields").is_empty(),
             "{name}"

@@ -76,8 +76,8 @@ pub struct MeshFile {
     pub data: Vec<u8>,
 }
 
-/// `visualization_msgs/msg/Marker` (ROS 2 Iron and later: with the
-/// texture and mesh_file fields).
+/// `visualization_msgs/msg/Marker` (as in ROS 2 Humble and Jazzy: with
+/// the texture and mesh_file fields).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct Marker {
     pub header: Header,
