@@ -684,7 +684,10 @@ fn the_msg_files_parse_with_rosbags_and_match_the_idl_field_for_field() {
     }
     for (name, check) in types.iter().filter(|(n, _)| !n.starts_with('_')) {
         assert_eq!(check["idl"], check["msg"], "{name}: IDL against .msg");
-        assert_eq!(check["idl"], check["humble"], "{name}: IDL against Humble's");
+        assert_eq!(
+            check["idl"], check["humble"],
+            "{name}: IDL against Humble's"
+        );
         assert!(
             !check["msg"].as_array().expect("fields").is_empty(),
             "{name}"
