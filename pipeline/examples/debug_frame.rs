@@ -1,5 +1,6 @@
 //! Prints what every stage did on one frame of a recording: planes, the
-//! chosen pair, the pass-through range, normal and cluster statistics.
+//! surfaces with their roles and the road (as the estimator chooses), the
+//! pass-through range, normal and cluster statistics.
 //!
 //! `cargo run -p slope-pipeline --example debug_frame -- DIR [FRAME]`
 //! (`CONFIG=toml` runs with that estimator config, e.g.
@@ -16,7 +17,9 @@ use slope_pipeline::cosine_kmeans::CosineKmeans;
 use slope_pipeline::normals::NormalEstimator;
 use slope_pipeline::pass_through::PassThrough;
 use slope_pipeline::ransac_planes::{PlaneSegmenter, SegmentedPlane, Threshold};
-use slope_pipeline::selection::{select_planes, Ground, PlaneSummary};
+use slope_pipeline::selection::{
+    select_ground, survey_surfaces, Ground, PlaneSummary, SurveyInput,
+};
 use slope_pipeline::statistical_outlier::StatisticalOutlierFilter;
 use slope_pipeline::{CloudView, EstimatorConfig};
 
@@ -50,11 +53,33 @@ fn main() {
     let up = view.mount.up_vector().map(Vector3::from);
     let summaries = print_planes(&view, &planes, &config, up);
     write_label_image(&dir, &view, &planes);
-    let sel = select_planes(&summaries, up, Some(view.mount.height_m), &config.selection);
-    println!("selection: {sel:?}");
-    let Ok(sel) = sel else { return };
-    let mut chosen = vec![("inclined", sel.inclined)];
-    if let Ground::Planes(g) = &sel.ground {
+    let config_sel = &config.selection;
+    let Some(ground) = select_ground(&summaries, up, Some(view.mount.height_m), config_sel) else {
+        println!("selection: no ground");
+        return;
+    };
+    // The estimator's own choice: every surface with its role, the road.
+    let input = SurveyInput {
+        cloud: &view,
+        planes: &planes,
+        summaries: &summaries,
+        mount_up: up,
+        mount_height_m: Some(view.mount.height_m),
+    };
+    let scene = survey_surfaces(&input, &ground, config_sel, &config.road);
+    println!("ground: {ground:?}");
+    let road = scene.as_ref().and_then(|scene| {
+        for (k, s) in scene.surfaces.iter().enumerate() {
+            println!("  surface {k:2} plane {:2}: {s}", s.plane_index);
+        }
+        scene.road_surface().map(|s| s.plane_index)
+    });
+    println!("road: {road:?}");
+    let mut chosen = Vec::new();
+    if let Some(road) = road {
+        chosen.push(("road", road));
+    }
+    if let Ground::Planes(g) = &ground {
         chosen.push(("ground", g[0]));
     }
     let means: Vec<_> = chosen

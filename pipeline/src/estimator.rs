@@ -250,8 +250,10 @@ impl Estimator {
         clock.lap("outlier");
         self.segment_planes(cloud, &mut rng);
         clock.lap("ransac");
-        let selection = self.select(cloud);
+        let ground = self.select_ground(cloud);
         clock.lap("selection");
+        let selection = ground.map(|ground| self.survey(cloud, ground));
+        clock.lap("surfaces");
         let selection = match selection {
             None => return Err(EstimateStatus::NoGround),
             Some(Ok(selection)) => selection,
@@ -353,28 +355,35 @@ impl Estimator {
         }
     }
 
-    /// The ground and the road among the segmented planes (every surface
-    /// into `self.scene`): `None` without a ground, the ground alone (the
-    /// error) without a road.
-    fn select(&mut self, cloud: &CloudView<'_>) -> Option<Result<Selection, Ground>> {
+    /// The segmented planes' summaries and the ground among them (`None`:
+    /// no ground).
+    fn select_ground(&mut self, cloud: &CloudView<'_>) -> Option<Ground> {
         self.summarize_planes(cloud);
         let mount_up = cloud.mount.up_vector().map(Vector3::from);
-        let mount_height_m = Some(cloud.mount.height_m);
-        let config = &self.config.selection;
-        let ground = select_ground(&self.summaries, mount_up, mount_height_m, config)?;
+        select_ground(
+            &self.summaries,
+            mount_up,
+            Some(cloud.mount.height_m),
+            &self.config.selection,
+        )
+    }
+
+    /// Every surface over `ground` (into `self.scene`) and the road among
+    /// them: the ground alone (the error) without a road.
+    fn survey(&mut self, cloud: &CloudView<'_>, ground: Ground) -> Result<Selection, Ground> {
         let input = SurveyInput {
             cloud,
             planes: segmented(&self.segmenter, &self.every_point, &self.config),
             summaries: &self.summaries,
-            mount_up,
-            mount_height_m,
+            mount_up: cloud.mount.up_vector().map(Vector3::from),
+            mount_height_m: Some(cloud.mount.height_m),
         };
-        self.scene = survey_surfaces(&input, &ground, config, &self.config.road);
+        self.scene = survey_surfaces(&input, &ground, &self.config.selection, &self.config.road);
         let road = self.scene.as_ref().and_then(|scene| {
             let surface = scene.road_surface()?;
             Some((surface.plane_index, scene.frame))
         });
-        Some(match road {
+        match road {
             Some((inclined, frame)) => Ok(Selection {
                 ground,
                 inclined,
@@ -382,7 +391,7 @@ impl Estimator {
                 forward: frame.forward,
             }),
             None => Err(ground),
-        })
+        }
     }
 
     /// Keeps the selection's roles for [`Self::inspection`].

@@ -150,3 +150,96 @@ fn stairs_top_riser_stands_on_the_first_tread() {
         );
     }
 }
+
+/// A surface's extents come from the ends of each image row it covers
+/// (`selection/surfaces.rs`); on every real frame they are within
+/// `EXTENT_TOLERANCE_M` plus four times the plane's RMS (its points' noise
+/// off the plane: an inlier inside a row can lie beyond the row's ends by
+/// that much) of the extremes over all of its inliers (the oracle below:
+/// every inlier), for every surface but the ground (its segments pooled).
+/// The join tolerance (5 cm) is what heights must resolve.
+const EXTENT_TOLERANCE_M: f64 = 0.01;
+
+#[test]
+fn sampled_extents_match_every_inlier_s_extremes() {
+    use nalgebra::Vector3;
+    use slope_ipc_types::SurfaceRole;
+    for name in [
+        "kinect2-stairs-front",
+        "kinect2-stairs-top",
+        "kinect1-office",
+    ] {
+        let Some(dir) = common::shared_data(name) else {
+            return;
+        };
+        let rec = common::Recording::open(&dir).expect("recording");
+        let frame = rec.frame(0).expect("frame 0");
+        let view = frame.view();
+        let mut est = Estimator::new(EstimatorConfig::default().for_sensor(rec.sensor()));
+        let e = est.estimate(&view);
+        let scene = e.scene.expect("surfaces");
+        let planes = est.inspection().planes;
+        let g = &scene.frame;
+        let mut worst = 0.0f64;
+        for s in scene
+            .surfaces
+            .iter()
+            .filter(|s| s.role != SurfaceRole::Ground)
+        {
+            let points: Vec<Vector3<f64>> = planes[s.plane_index]
+                .inliers
+                .iter()
+                .map(|&i| {
+                    let p = &view.points[i as usize];
+                    Vector3::new(p.x_m.into(), p.y_m.into(), p.z_m.into())
+                })
+                .collect();
+            let range = |f: &dyn Fn(&Vector3<f64>) -> f64| {
+                points
+                    .iter()
+                    .map(f)
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                        (a.min(v), b.max(v))
+                    })
+            };
+            let (near, far) = range(&|p| g.ahead(p));
+            let (left, right) = range(&|p| g.lateral(p));
+            let (low, high) = range(&|p| g.height(p));
+            for (what, sampled, exact) in [
+                ("distance", s.distance_m, near),
+                ("far", s.far_m, far),
+                ("left", s.left_m, left),
+                ("right", s.right_m, right),
+                ("lowest", s.lowest_m, low),
+                ("highest", s.highest_m, high),
+            ] {
+                // A sample's extreme lies inside the exact range.
+                let inside = if matches!(what, "distance" | "left" | "lowest") {
+                    sampled >= exact - 1e-4
+                } else {
+                    sampled <= exact + 1e-4
+                };
+                assert!(
+                    inside,
+                    "{name} plane {} {what}: {sampled} vs {exact}",
+                    s.plane_index
+                );
+                worst = worst.max((sampled - exact).abs());
+                if (sampled - exact).abs() > 0.02 {
+                    println!(
+                        "{name} plane {} ({} px, {:?}) {what}: {sampled:.3} vs {exact:.3}",
+                        s.plane_index, s.inliers, s.role
+                    );
+                }
+                assert!(
+                    (sampled - exact).abs() <= EXTENT_TOLERANCE_M + 4.0 * s.rms_m,
+                    "{name} plane {} ({} inliers, RMS {:.3}) {what}: sampled {sampled:.3}, all {exact:.3}",
+                    s.plane_index,
+                    s.inliers,
+                    s.rms_m
+                );
+            }
+        }
+        println!("{name}: worst extent off by {:.1} cm", worst * 100.0);
+    }
+}

@@ -222,6 +222,7 @@ fn the_message_carries_the_estimate() {
             "outlier",
             "ransac",
             "selection",
+            "surfaces",
             "pass_through",
             "normals",
             "kmeans",

@@ -63,7 +63,7 @@ pub use road_config::RoadConfig;
 pub use roles::assign_roles;
 pub use scene::{survey_surfaces, RoadScene, SurveyInput};
 pub(crate) use segment::{chosen_segments, PlaneSegment};
-pub use surfaces::{describe_surfaces, plane_axes, Surface, CORRIDOR_MIN_PIXELS, EXTENT_SAMPLES};
+pub use surfaces::{describe_surfaces, plane_axes, Surface, CORRIDOR_MIN_PIXELS, CORRIDOR_SAMPLES};
 
 /// What selection needs to know about a segmented plane.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -140,9 +140,13 @@ pub fn select_ground(
     ground::choose_ground(planes, &reference, height, mount_up.is_some(), config)
 }
 
-/// Chooses ground and inclined plane. `mount_up` is the mount's up vector
-/// (known pitch), `mount_height_m` its height above the ground (when known).
-/// The error is the status to report.
+/// Chooses ground and inclined plane from the planes' summaries alone:
+/// the nearest forward-facing candidate (`inclined.rs`), which does not ask
+/// whether it meets the ground or lies in the corridor. The estimator
+/// chooses the road with [`survey_surfaces`] instead (it needs the
+/// inliers); this rule stays for callers that have summaries only.
+/// `mount_up` is the mount's up vector (known pitch), `mount_height_m` its
+/// height above the ground (when known). The error is the status to report.
 pub fn select_planes(
     planes: &[PlaneSummary],
     mount_up: Option<Vector3<f64>>,

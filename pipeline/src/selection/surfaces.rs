@@ -9,10 +9,15 @@
 //! its inliers, and how much of it lies in the robot's corridor. Roles come
 //! after (`roles.rs`), the road last (`road.rs`).
 //!
-//! Planes of more than [`EXTENT_SAMPLES`] (2048) inliers are walked on an
-//! evenly spaced sample of them (every k-th in pixel order: every row of
-//! the plane keeps samples, at a phase that shifts from row to row, so an
-//! extreme is off by at most k pixels along a row and usually by one).
+//! The extremes come from the first and last inlier of each image row
+//! the plane covers, found by a search in its (pixel-ordered) inliers, not
+//! a walk over all of them: along a row a plane's points lie on one line,
+//! where a linear function of the point (ahead, lateral, height, the
+//! outline's coordinates) is monotone, so its extremes over the row are at
+//! the row's ends, and over the plane at some row's ends (up to the
+//! points' noise off the plane). How much of a plane lies in the corridor
+//! comes from an evenly spaced sample of at most [`CORRIDOR_SAMPLES`]
+//! inliers.
 
 use nalgebra::Vector3;
 use slope_ipc_types::{SurfaceRole, SurfaceSupport};
@@ -22,9 +27,11 @@ use super::{is_flat_at_noise_level, GroundFrame, PlaneSummary, RoadConfig, Selec
 use crate::cloud::CloudView;
 use crate::plane_fit::Plane;
 use crate::ransac_planes::SegmentedPlane;
+use slope_ipc_types::CloudPoint;
 
-/// A plane's extremes are taken over at most about this many inliers.
-pub const EXTENT_SAMPLES: usize = 2048;
+/// A plane's share of the corridor is counted over at most about this
+/// many of its inliers (every k-th in pixel order).
+pub const CORRIDOR_SAMPLES: usize = 512;
 
 /// A surface reaches into the corridor with at least this many inliers
 /// there (a plane's stray edge pixel does not).
@@ -174,9 +181,10 @@ fn describe(
     let (level, fall) = plane_axes(plane, frame);
     let mut walk = Extents::new(frame, &level, &fall, road);
     let total: usize = lists.iter().map(|l| l.len()).sum();
-    let stride = total.div_ceil(EXTENT_SAMPLES).max(1);
+    let stride = total.div_ceil(CORRIDOR_SAMPLES).max(1);
     for list in lists {
-        walk.add_all(cloud, list, stride);
+        walk.add_row_ends(cloud, list);
+        walk.add_corridor(cloud, list, stride);
     }
     let tilt = frame.tilt_deg(&plane.normal);
     let range = |k: usize| (finite_or_nan(walk.min[k]), finite_or_nan(walk.max[k]));
@@ -280,38 +288,67 @@ impl Extents {
         }
     }
 
-    /// Every `stride`-th of the `inliers`.
-    fn add_all(&mut self, cloud: &CloudView<'_>, inliers: &[u32], stride: usize) {
+    /// The first and last of `inliers` (pixel indices of `cloud`, in
+    /// pixel order) in every image row they cover. A row holds at most
+    /// `width` of them, so its end is searched among the next `width`.
+    fn add_row_ends(&mut self, cloud: &CloudView<'_>, inliers: &[u32]) {
+        let width = cloud.width.max(1);
         let mut min = [f32::INFINITY; 5];
         let mut max = [f32::NEG_INFINITY; 5];
-        let mut corridor_sum = 0.0f32;
-        for &pixel in inliers.iter().step_by(stride) {
-            let Some(p) = cloud.points.get(pixel as usize) else {
-                continue;
-            };
-            let v = [p.x_m, p.y_m, p.z_m];
-            let mut c = [0.0f32; 5];
-            for k in 0..5 {
-                let a = &self.axes[k];
-                c[k] = a[0] * v[0] + a[1] * v[1] + a[2] * v[2] + self.offsets[k];
-                // A NaN (no reading: never an inlier) changes nothing.
-                min[k] = min[k].min(c[k]);
-                max[k] = max[k].max(c[k]);
+        let mut start = 0;
+        let mut len = 1;
+        while let Some(&first) = inliers.get(start) {
+            let next_row = (first as usize / width + 1) * width;
+            let window = &inliers[start..inliers.len().min(start + width)];
+            // At least 1: `first` is in its own row (out of order input
+            // still moves on). Rows of a plane change length little from
+            // one to the next: the search starts at the last one's.
+            len = partition_near(window, len, |p| (p as usize) < next_row).max(1);
+            for pixel in [first, window[len - 1]] {
+                if let Some(p) = cloud.points.get(pixel as usize) {
+                    let c = self.coordinates(p);
+                    for k in 0..5 {
+                        // A NaN (no reading: never an inlier) changes nothing.
+                        min[k] = min[k].min(c[k]);
+                        max[k] = max[k].max(c[k]);
+                    }
+                }
             }
-            if c[LATERAL].abs() <= self.half_width_m
-                && c[AHEAD] > 0.0
-                && c[AHEAD] <= self.look_ahead_m
-            {
-                self.corridor_pixels += 1;
-                self.corridor_ahead = self.corridor_ahead.min(c[AHEAD]);
-                corridor_sum += c[AHEAD];
-            }
+            start += len;
         }
         for k in 0..5 {
             self.min[k] = self.min[k].min(f64::from(min[k]));
             self.max[k] = self.max[k].max(f64::from(max[k]));
         }
+    }
+
+    /// Every `stride`-th of the `inliers` counted in the corridor.
+    fn add_corridor(&mut self, cloud: &CloudView<'_>, inliers: &[u32], stride: usize) {
+        let mut corridor_sum = 0.0f32;
+        let [ahead, lateral] = [self.axes[AHEAD], self.axes[LATERAL]];
+        for &pixel in inliers.iter().step_by(stride) {
+            let Some(p) = cloud.points.get(pixel as usize) else {
+                continue;
+            };
+            let a = ahead[0] * p.x_m + ahead[1] * p.y_m + ahead[2] * p.z_m;
+            let l = lateral[0] * p.x_m + lateral[1] * p.y_m + lateral[2] * p.z_m;
+            if l.abs() <= self.half_width_m && a > 0.0 && a <= self.look_ahead_m {
+                self.corridor_pixels += 1;
+                self.corridor_ahead = self.corridor_ahead.min(a);
+                corridor_sum += a;
+            }
+        }
         self.corridor_sum += f64::from(corridor_sum);
+    }
+
+    /// The five coordinates of `p`.
+    fn coordinates(&self, p: &CloudPoint) -> [f32; 5] {
+        let mut c = [0.0f32; 5];
+        for (k, c) in c.iter_mut().enumerate() {
+            let a = &self.axes[k];
+            *c = a[0] * p.x_m + a[1] * p.y_m + a[2] * p.z_m + self.offsets[k];
+        }
+        c
     }
 
     /// The rectangle of the extremes along `level` and `fall`, on `plane`.
@@ -339,11 +376,73 @@ impl Extents {
     }
 }
 
+/// The number of leading elements of `items` for which `below` holds
+/// (`below` true then false along `items`, as for
+/// `slice::partition_point`), searched outwards from `hint` in steps that
+/// double, so that an answer near `hint` costs a few reads close together
+/// instead of a binary search over all of `items`.
+fn partition_near(items: &[u32], hint: usize, below: impl Fn(u32) -> bool) -> usize {
+    let n = items.len();
+    let hint = hint.min(n);
+    let count = |slice: &[u32]| slice.partition_point(|&p| below(p));
+    if hint < n && below(items[hint]) {
+        // The answer is past `hint`: items[..lo] all hold.
+        let (mut lo, mut step) = (hint + 1, 1);
+        loop {
+            let probe = lo - 1 + step;
+            if probe >= n {
+                return lo + count(&items[lo..]);
+            }
+            if !below(items[probe]) {
+                return lo + count(&items[lo..probe]);
+            }
+            (lo, step) = (probe + 1, step * 2);
+        }
+    }
+    // The answer is at most `hint`: items[hi..] all fail.
+    let (mut hi, mut step) = (hint, 1);
+    loop {
+        if hi < step {
+            return count(&items[..hi]);
+        }
+        let probe = hi - step;
+        if below(items[probe]) {
+            return probe + 1 + count(&items[probe + 1..hi]);
+        }
+        (hi, step) = (probe, step * 2);
+    }
+}
+
 /// `f64::INFINITY` (nothing seen) as NaN.
 fn finite_or_nan(v: f64) -> f64 {
     if v.is_finite() {
         v
     } else {
         f64::NAN
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::partition_near;
+
+    /// Against `slice::partition_point` (the oracle), every hint, every
+    /// split of lists with repeats.
+    #[test]
+    fn partition_near_is_partition_point_from_any_hint() {
+        let lists: [&[u32]; 4] = [&[], &[5], &[1, 2, 2, 3, 7, 9, 9, 12], &[0, 0, 0, 4]];
+        for items in lists {
+            for split in 0..=13 {
+                let below = |p: u32| p < split;
+                let want = items.partition_point(|&p| below(p));
+                for hint in 0..=items.len() + 2 {
+                    assert_eq!(
+                        partition_near(items, hint, below),
+                        want,
+                        "{items:?} {split} {hint}"
+                    );
+                }
+            }
+        }
     }
 }

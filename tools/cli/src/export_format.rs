@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use slope_ipc_types::SlopeEstimate;
+use slope_ipc_types::{SlopeEstimate, Surfaces};
 use slope_sensor::recording::RecordingMeta;
 
 use crate::mcap_export::{McapCompression, McapExporter, McapFrame};
@@ -64,6 +64,15 @@ impl FrameExporter {
         match self {
             Self::Mcap(mcap) => mcap.write_estimate(estimate),
             Self::Rosbag2(bag) => bag.write_estimate(estimate),
+        }
+    }
+
+    /// Writes a frame's surfaces, stamped with its capture time (MCAP:
+    /// `/slope/surfaces`; a ROS 2 bag has no surfaces topic and skips them).
+    pub fn write_surfaces(&mut self, surfaces: &Surfaces) -> anyhow::Result<()> {
+        match self {
+            Self::Mcap(mcap) => mcap.write_surfaces(surfaces),
+            Self::Rosbag2(_) => Ok(()),
         }
     }
 

@@ -34,7 +34,7 @@ pub enum RecordFormat {
     /// A recording directory (the recording format) that slope-replay plays.
     Recording,
     /// An MCAP file (Foxglove, ROS 2 tooling): depth, cloud and, when an
-    /// estimator runs, its estimates (topic source only). JSON in
+    /// estimator runs, its estimates and surfaces (topic source only). JSON in
     /// zstd-compressed chunks (--mcap-compression): about 1.7 MB a Kinect
     /// v2 frame, 50 MB a second at 30 Hz (a recording directory takes
     /// about 0.23 MB a frame): for short clips; record long runs as a

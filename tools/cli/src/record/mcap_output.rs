@@ -1,13 +1,16 @@
 //! `--format mcap`: the checks before an MCAP recording, and the estimates
-//! it writes beside the clouds (those received meanwhile, and those of the
-//! last clouds, which arrive after them).
+//! and surfaces it writes beside the clouds (those received meanwhile, and
+//! those of the last clouds, which arrive after them).
 
 use std::time::{Duration, Instant};
 
-use slope_sensor::ipc::EstimateSubscriber;
+use anyhow::Context;
+use iceoryx2::prelude::*;
+use slope_ipc_types::ServiceNames;
+use slope_sensor::ipc::{EstimateSubscriber, SurfacesSubscriber};
 use slope_sensor::publish::StopFlag;
 
-use super::args::{RecordArgs, RecordLimits, RecordSource};
+use super::args::{RecordArgs, RecordFormat, RecordLimits, RecordSource};
 use super::output::check_parent;
 use super::topic::record_topic;
 use super::writer_thread::SinkThread;
@@ -38,6 +41,7 @@ pub(super) fn record_mcap(
     tracing::info!(
         written = stats.written,
         estimates = stats.estimates,
+        surfaces = stats.surfaces,
         missed = stats.missed,
         interrupted = stats.stopped,
         out = %out.display(),
@@ -46,33 +50,81 @@ pub(super) fn record_mcap(
     Ok(stats)
 }
 
-/// Queues the estimates received so far for `writer`; returns how many.
-pub(super) fn write_estimates(
-    estimates: &EstimateSubscriber,
-    writer: &SinkThread,
-) -> anyhow::Result<u64> {
-    let mut written = 0;
-    while let Some(estimate) = estimates.receive()? {
-        if !writer.write_estimate(estimate) {
-            anyhow::bail!("the recorder's writer stopped");
-        }
-        written += 1;
-    }
-    Ok(written)
+/// What an MCAP recording writes beside the clouds: the estimator's
+/// estimates and, for `--format mcap`, its surfaces (a ROS 2 bag has no
+/// surfaces topic).
+pub(super) struct Messages {
+    estimates: EstimateSubscriber,
+    surfaces: Option<SurfacesSubscriber>,
 }
 
-/// Writes the estimates of the last clouds, published while they were
-/// written, for up to 300 ms (less when `stop` is set); returns how many.
-pub(super) fn settle_estimates(
-    estimates: &EstimateSubscriber,
-    writer: &SinkThread,
-    stop: &StopFlag,
-) -> anyhow::Result<u64> {
-    let mut written = 0;
-    let settle = Instant::now() + Duration::from_millis(300);
-    while Instant::now() < settle && !stop.is_stopped() {
-        written += write_estimates(estimates, writer)?;
-        estimates.listener().wait(Duration::from_millis(50))?;
+/// How many messages [`Messages`] queued.
+#[derive(Debug, Default, Clone, Copy)]
+pub(super) struct Queued {
+    pub estimates: u64,
+    pub surfaces: u64,
+}
+
+impl std::ops::AddAssign for Queued {
+    fn add_assign(&mut self, other: Self) {
+        self.estimates += other.estimates;
+        self.surfaces += other.surfaces;
     }
-    Ok(written)
+}
+
+impl Messages {
+    /// The subscribers of `format` (none for a recording directory).
+    pub(super) fn create(
+        node: &Node<ipc::Service>,
+        names: &ServiceNames,
+        format: RecordFormat,
+    ) -> anyhow::Result<Option<Self>> {
+        let surfaces = match format {
+            RecordFormat::Recording => return Ok(None),
+            RecordFormat::Rosbag2 => None,
+            RecordFormat::Mcap => Some(
+                SurfacesSubscriber::create(node, names)
+                    .context("cannot subscribe to the surfaces")?,
+            ),
+        };
+        let estimates =
+            EstimateSubscriber::create(node, names).context("cannot subscribe to estimates")?;
+        Ok(Some(Self {
+            estimates,
+            surfaces,
+        }))
+    }
+
+    /// Queues the messages received so far for `writer`.
+    pub(super) fn write(&self, writer: &SinkThread) -> anyhow::Result<Queued> {
+        let mut queued = Queued::default();
+        while let Some(estimate) = self.estimates.receive()? {
+            if !writer.write_estimate(estimate) {
+                anyhow::bail!("the recorder's writer stopped");
+            }
+            queued.estimates += 1;
+        }
+        if let Some(subscriber) = &self.surfaces {
+            while let Some(surfaces) = subscriber.receive()? {
+                if !writer.write_surfaces(surfaces) {
+                    anyhow::bail!("the recorder's writer stopped");
+                }
+                queued.surfaces += 1;
+            }
+        }
+        Ok(queued)
+    }
+
+    /// Writes the messages of the last clouds, published while they were
+    /// written, for up to 300 ms (less when `stop` is set).
+    pub(super) fn settle(&self, writer: &SinkThread, stop: &StopFlag) -> anyhow::Result<Queued> {
+        let mut queued = Queued::default();
+        let settle = Instant::now() + Duration::from_millis(300);
+        while Instant::now() < settle && !stop.is_stopped() {
+            queued += self.write(writer)?;
+            self.estimates.listener().wait(Duration::from_millis(50))?;
+        }
+        queued += self.write(writer)?;
+        Ok(queued)
+    }
 }

@@ -21,7 +21,7 @@
 //! | `source.rs` | recording a frame source: the Kinect v2, a recording |
 //! | `topic.rs` | the recording loop of the cloud topic |
 //! | `sink.rs` | where the topic's frames go: a recording directory or an MCAP file |
-//! | `mcap_output.rs` | `--format mcap`: its checks and the estimates it writes |
+//! | `mcap_output.rs` | `--format mcap`: its checks and the estimates and surfaces it writes |
 //! | `writer_thread.rs` | the sink on a thread of its own, so that encoding never delays receiving |
 //! | `tests.rs` | the unit tests |
 
@@ -63,8 +63,10 @@ pub struct RecordStats {
     pub skipped: u64,
     /// True when a signal ended the recording.
     pub stopped: bool,
-    /// Estimates written (MCAP only).
+    /// Estimates written (MCAP and ROS 2 bags only).
     pub estimates: u64,
+    /// Surfaces messages written (MCAP only).
+    pub surfaces: u64,
 }
 
 pub fn run(args: &RecordArgs, stop: &StopFlag) -> anyhow::Result<RecordStats> {

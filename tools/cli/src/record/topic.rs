@@ -1,19 +1,20 @@
 //! The recording loop of the cloud topic: waits for clouds within the
 //! limits, rebuilds each one's images and hands them to the [`Sink`]
-//! opened at the first cloud (with the estimates, for an MCAP file).
+//! opened at the first cloud (with the estimates and surfaces, for an MCAP
+//! file).
 
 use std::time::{Duration, Instant};
 
 use anyhow::Context;
 use slope_ipc_types::{CloudHeader, CloudPoint, CloudSource};
-use slope_sensor::ipc::{create_node, CloudSubscriber, EstimateSubscriber};
+use slope_sensor::ipc::{create_node, CloudSubscriber};
 use slope_sensor::publish::StopFlag;
 use slope_sensor::recording::{ColorImage, DepthImage};
 use slope_sensor::source::SourceInfo;
 
 use super::args::{RecordArgs, RecordFormat, RecordLimits};
 use super::images::{cloud_to_images, sensor_of, TOPIC_DEPTH_UNIT_M};
-use super::mcap_output::{settle_estimates, write_estimates};
+use super::mcap_output::Messages;
 use super::sink::Sink;
 use super::writer_thread::{QueuedFrame, SinkThread, Written};
 use super::RecordStats;
@@ -29,12 +30,7 @@ pub fn record_topic(
     let node = create_node(&node_name("slope-record"))?;
     let subscriber =
         CloudSubscriber::create_deep(&node, &names).context("cannot subscribe to clouds")?;
-    let estimates = match args.format() {
-        RecordFormat::Mcap | RecordFormat::Rosbag2 => Some(
-            EstimateSubscriber::create(&node, &names).context("cannot subscribe to estimates")?,
-        ),
-        RecordFormat::Recording => None,
-    };
+    let messages = Messages::create(&node, &names, args.format())?;
     tracing::info!(service = subscriber.service_name(), out = %args.out_dir().display(), "recording the cloud topic");
 
     let mut recorder = TopicRecorder::new(args, limits);
@@ -49,7 +45,7 @@ pub fn record_topic(
         }
         subscriber.listener().wait(slice)?;
         let received = recorder
-            .write_estimates(estimates.as_ref())
+            .write_messages(messages.as_ref())
             .and_then(|()| recorder.receive_clouds(&subscriber));
         match received {
             Ok(true) => break,
@@ -57,7 +53,7 @@ pub fn record_topic(
             Err(err) => return Err(recorder.fail(err)),
         }
     }
-    recorder.finish(estimates.as_ref(), stop)
+    recorder.finish(messages.as_ref(), stop)
 }
 
 /// The state of [`record_topic`]: the sink (opened at the first cloud,
@@ -125,11 +121,13 @@ impl<'a> TopicRecorder<'a> {
         Ok(false)
     }
 
-    /// Estimates (MCAP only) once the file exists; earlier ones belong to
-    /// clouds that were not recorded.
-    fn write_estimates(&mut self, estimates: Option<&EstimateSubscriber>) -> anyhow::Result<()> {
-        if let (Some(estimates), Some((writer, _))) = (estimates, &self.writer) {
-            self.stats.estimates += write_estimates(estimates, writer)?;
+    /// Estimates and surfaces (MCAP only) once the file exists; earlier
+    /// ones belong to clouds that were not recorded.
+    fn write_messages(&mut self, messages: Option<&Messages>) -> anyhow::Result<()> {
+        if let (Some(messages), Some((writer, _))) = (messages, &self.writer) {
+            let queued = messages.write(writer)?;
+            self.stats.estimates += queued.estimates;
+            self.stats.surfaces += queued.surfaces;
         }
         Ok(())
     }
@@ -235,20 +233,23 @@ impl<'a> TopicRecorder<'a> {
         }
     }
 
-    /// Writes the last estimates (MCAP), waits for the writer and finishes
+    /// Writes the last estimates and surfaces (MCAP), waits for the writer and finishes
     /// the sink, if a cloud opened one.
     fn finish(
         mut self,
-        estimates: Option<&EstimateSubscriber>,
+        messages: Option<&Messages>,
         stop: &StopFlag,
     ) -> anyhow::Result<RecordStats> {
         let Some((writer, _)) = &self.writer else {
             tracing::warn!("no cloud arrived; nothing was recorded");
             return Ok(self.stats);
         };
-        if let Some(estimates) = estimates {
-            match settle_estimates(estimates, writer, stop) {
-                Ok(settled) => self.stats.estimates += settled,
+        if let Some(messages) = messages {
+            match messages.settle(writer, stop) {
+                Ok(settled) => {
+                    self.stats.estimates += settled.estimates;
+                    self.stats.surfaces += settled.surfaces;
+                }
                 Err(err) => return Err(self.fail(err)),
             }
         }

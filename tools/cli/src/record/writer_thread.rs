@@ -14,7 +14,7 @@ use std::thread::JoinHandle;
 
 use anyhow::Context;
 use crossbeam_channel::{bounded, Sender};
-use slope_ipc_types::{CloudHeader, CloudPoint, SlopeEstimate};
+use slope_ipc_types::{CloudHeader, CloudPoint, SlopeEstimate, Surfaces};
 use slope_sensor::recording::{ColorImage, DepthImage};
 
 use super::sink::Sink;
@@ -34,6 +34,7 @@ pub(super) struct QueuedFrame {
 enum Job {
     Frame(Box<QueuedFrame>),
     Estimate(Box<SlopeEstimate>),
+    Surfaces(Box<Surfaces>),
 }
 
 /// What the writer thread did: the sink, the frames it wrote and its error.
@@ -74,6 +75,10 @@ impl SinkThread {
                             Sink::Mcap(mcap) => mcap.write_estimate(&estimate),
                             Sink::Recording(..) => Ok(()),
                         },
+                        Job::Surfaces(surfaces) => match &mut sink {
+                            Sink::Mcap(mcap) => mcap.write_surfaces(&surfaces),
+                            Sink::Recording(..) => Ok(()),
+                        },
                     };
                     if let Err(err) = result {
                         return Written {
@@ -102,6 +107,11 @@ impl SinkThread {
     /// Queues an estimate (MCAP; ignored for a recording directory).
     pub(super) fn write_estimate(&self, estimate: SlopeEstimate) -> bool {
         self.jobs.send(Job::Estimate(Box::new(estimate))).is_ok()
+    }
+
+    /// Queues a frame's surfaces (MCAP; ignored for a recording directory).
+    pub(super) fn write_surfaces(&self, surfaces: Surfaces) -> bool {
+        self.jobs.send(Job::Surfaces(Box::new(surfaces))).is_ok()
     }
 
     /// Waits until everything queued is written (or the writer failed).
