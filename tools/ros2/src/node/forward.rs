@@ -5,7 +5,7 @@ use std::time::{Duration, Instant};
 
 use ros2_client::dds::Publisher;
 use serde::Serialize;
-use slope_ipc_types::ServiceNames;
+use slope_ipc_types::{ServiceNames, SlopeEstimate};
 use slope_sensor::ipc::{create_node, EstimateSubscriber, HealthSubscriber, SurfacesSubscriber};
 use slope_sensor::publish::StopFlag;
 use slope_tools::cli::{node_name, wait_loop, SilenceNote};
@@ -31,6 +31,16 @@ pub struct Ros2Stats {
     pub dropped: u64,
 }
 
+impl Ros2Stats {
+    /// The status line for systemd.
+    fn status(&self) -> String {
+        format!(
+            "{} estimates, {} surfaces, {} markers, {} diagnostics published; {} dropped",
+            self.estimates, self.surfaces, self.markers, self.diagnostics, self.dropped
+        )
+    }
+}
+
 /// Runs the node as a systemd notify daemon until `stop` is set:
 /// `READY=1` once the DDS publishers and the iceoryx2 subscribers exist,
 /// a status line a second, `STATUS=failed: <reason>` before a failed
@@ -45,7 +55,15 @@ pub fn run(args: &Ros2Args, stop: &StopFlag) -> anyhow::Result<Ros2Stats> {
     result
 }
 
-/// The body of [`run`] once the settings are known.
+/// The iceoryx2 topics the node reads.
+struct Inputs {
+    estimates: EstimateSubscriber,
+    surfaces: SurfacesSubscriber,
+    health: HealthSubscriber,
+}
+
+/// The body of [`run`] once the settings are known: the DDS side, then
+/// the iceoryx2 side, then the loop until a stop.
 fn serve(
     settings: &Settings,
     stop: &StopFlag,
@@ -57,10 +75,11 @@ fn serve(
     let outputs = Outputs::create(settings)?;
     let names = ServiceNames::new(settings.service_prefix.clone());
     let node = create_node(&node_name("slope-ros2"))?;
-    let estimates = EstimateSubscriber::create(&node, &names)?;
-    let surfaces = SurfacesSubscriber::create(&node, &names)?;
-    let health = HealthSubscriber::create(&node, &names)?;
-    let mut rule = DiagnosticsRule::new(&settings.node_name, &settings.service_prefix);
+    let inputs = Inputs {
+        estimates: EstimateSubscriber::create(&node, &names)?,
+        surfaces: SurfacesSubscriber::create(&node, &names)?,
+        health: HealthSubscriber::create(&node, &names)?,
+    };
     let discovery = &settings.discovery;
     tracing::info!(
         estimates = %names.estimate(),
@@ -69,71 +88,115 @@ fn serve(
         discovery = discovery.range.name(),
         discovery_from = discovery.range_from.unwrap_or("default"),
         node = %settings.node_name,
-        tf_static = outputs.tf_static.is_some(),
         namespace = %settings.namespace,
+        tf_static = outputs.tf_static.is_some(),
         "ros2 node ready"
     );
     manager.ready("waiting for estimates");
-    let mut stats = Ros2Stats::default();
+    let mut forwarder = Forwarder::new(settings, &outputs);
     let mut silence = SilenceNote::new("estimate", &names.estimate(), "slope-estimator");
-    let mut failures = FailureNote::default();
-    // The newest estimate: its frame's surfaces follow it (the markers'
-    // text).
-    let mut last_estimate = None;
-    wait_loop(estimates.listener(), stop, || {
+    wait_loop(inputs.estimates.listener(), stop, || {
         silence.tick();
-        manager.tick(|| {
-            format!(
-                "{} estimates, {} surfaces, {} markers, {} diagnostics published; {} dropped",
-                stats.estimates, stats.surfaces, stats.markers, stats.diagnostics, stats.dropped
-            )
-        });
-        while let Some(estimate) = estimates.receive()? {
+        manager.tick(|| forwarder.stats.status());
+        if forwarder.wake(&inputs)? {
             silence.heard();
-            last_estimate = Some(estimate);
-            let message = SlopeEstimateMsg::new(&estimate, &settings.frame_id);
-            if send(&outputs.estimate, message, "an estimate", &mut failures) {
-                stats.estimates += 1;
-            } else {
-                stats.dropped += 1;
-            }
-        }
-        // A frame's surfaces follow its estimate: those not here yet go
-        // on the next wake (at most 100 ms later).
-        while let Some(frame) = surfaces.receive()? {
-            let array = markers(&frame, last_estimate.as_ref(), &settings.frame_id);
-            if send(&outputs.markers, array, "the markers", &mut failures) {
-                stats.markers += 1;
-            } else {
-                stats.dropped += 1;
-            }
-            let message = SurfacesMsg::new(&frame, &settings.frame_id);
-            if send(&outputs.surfaces, message, "the surfaces", &mut failures) {
-                stats.surfaces += 1;
-            } else {
-                stats.dropped += 1;
-            }
-        }
-        // Reports come about once a second: looked at on every wake.
-        while let Some(report) = health.receive()? {
-            let message = rule.array(&report);
-            if send(&outputs.diagnostics, message, "a diagnostic", &mut failures) {
-                stats.diagnostics += 1;
-            } else {
-                stats.dropped += 1;
-            }
         }
         Ok(true)
     })?;
+    let stats = forwarder.stats;
     tracing::info!(
         estimates = stats.estimates,
         surfaces = stats.surfaces,
-        diagnostics = stats.diagnostics,
         markers = stats.markers,
+        diagnostics = stats.diagnostics,
         dropped = stats.dropped,
         "ros2 node stopped"
     );
     Ok(stats)
+}
+
+/// Maps and publishes what arrives, counting.
+struct Forwarder<'a> {
+    frame_id: &'a str,
+    outputs: &'a Outputs,
+    rule: DiagnosticsRule,
+    /// The newest estimate: its frame's surfaces follow it (the markers'
+    /// text).
+    last_estimate: Option<SlopeEstimate>,
+    stats: Ros2Stats,
+    failures: FailureNote,
+}
+
+impl<'a> Forwarder<'a> {
+    fn new(settings: &'a Settings, outputs: &'a Outputs) -> Self {
+        Self {
+            frame_id: &settings.frame_id,
+            outputs,
+            rule: DiagnosticsRule::new(&settings.node_name, &settings.service_prefix),
+            last_estimate: None,
+            stats: Ros2Stats::default(),
+            failures: FailureNote::default(),
+        }
+    }
+
+    /// Publishes everything waiting on `inputs`; true when an estimate
+    /// came.
+    fn wake(&mut self, inputs: &Inputs) -> anyhow::Result<bool> {
+        let mut heard = false;
+        while let Some(estimate) = inputs.estimates.receive()? {
+            heard = true;
+            self.last_estimate = Some(estimate);
+            let message = SlopeEstimateMsg::new(&estimate, self.frame_id);
+            let sent = send(
+                &self.outputs.estimate,
+                message,
+                "an estimate",
+                &mut self.failures,
+            );
+            self.count(sent, |s| &mut s.estimates);
+        }
+        // A frame's surfaces follow its estimate: those not here yet go
+        // on the next wake (at most 100 ms later).
+        while let Some(frame) = inputs.surfaces.receive()? {
+            let array = markers(&frame, self.last_estimate.as_ref(), self.frame_id);
+            let sent = send(
+                &self.outputs.markers,
+                array,
+                "the markers",
+                &mut self.failures,
+            );
+            self.count(sent, |s| &mut s.markers);
+            let message = SurfacesMsg::new(&frame, self.frame_id);
+            let sent = send(
+                &self.outputs.surfaces,
+                message,
+                "the surfaces",
+                &mut self.failures,
+            );
+            self.count(sent, |s| &mut s.surfaces);
+        }
+        // Reports come about once a second: looked at on every wake.
+        while let Some(report) = inputs.health.receive()? {
+            let message = self.rule.array(&report);
+            let sent = send(
+                &self.outputs.diagnostics,
+                message,
+                "a diagnostic",
+                &mut self.failures,
+            );
+            self.count(sent, |s| &mut s.diagnostics);
+        }
+        Ok(heard)
+    }
+
+    /// One more in the counter `which` when `sent`, else one more dropped.
+    fn count(&mut self, sent: bool, which: fn(&mut Ros2Stats) -> &mut u64) {
+        if sent {
+            *which(&mut self.stats) += 1;
+        } else {
+            self.stats.dropped += 1;
+        }
+    }
 }
 
 /// Publishes `message` (`what`, for the log); false when DDS refused it
