@@ -259,9 +259,41 @@ fn assert_same_estimate(echo: &Value, dds: &Value) {
     assert_eq!(header["frame_id"], "slope_camera");
 }
 
-const ESTIMATE: &str = "rt/slope/estimate:SlopeEstimate:reliable:transient_local";
-const SURFACES: &str = "rt/slope/surfaces:Surfaces:reliable:transient_local";
-const MARKERS: &str = "rt/slope/markers:MarkerArray:best_effort:volatile";
+/// A ROS 2 namespace of the test's own (`/slope_test_ros2_<pid>_<n>`), so
+/// that two runs that drew the same DDS domain still do not share topics.
+fn test_namespace(prefix: &str) -> String {
+    format!("/{}", prefix.replace('-', "_"))
+}
+
+/// Our topics in `namespace` as DDS names (`rt/<ns>/slope/estimate`) and
+/// the listener's specs of them.
+struct Topics {
+    estimate: String,
+    surfaces: String,
+    markers: String,
+}
+
+impl Topics {
+    fn of(namespace: &str) -> Self {
+        Self {
+            estimate: format!("rt{namespace}/slope/estimate"),
+            surfaces: format!("rt{namespace}/slope/surfaces"),
+            markers: format!("rt{namespace}/slope/markers"),
+        }
+    }
+
+    fn estimate_spec(&self) -> String {
+        format!("{}:SlopeEstimate:reliable:transient_local", self.estimate)
+    }
+
+    fn surfaces_spec(&self) -> String {
+        format!("{}:Surfaces:reliable:transient_local", self.surfaces)
+    }
+
+    fn markers_spec(&self) -> String {
+        format!("{}:MarkerArray:best_effort:volatile", self.markers)
+    }
+}
 
 /// The overlay's role colours (tools/cli/src/render.rs) as ROS's floats.
 fn role_rgb(role: u64) -> [f64; 3] {
@@ -510,14 +542,20 @@ fn every_estimate_reaches_cyclone_dds_in_order_with_the_values_echo_shows() {
     let prefix = unique_prefix("ros2");
     let domain = unique_domain();
     let _estimator = start_estimator(&prefix, &["--health-interval-s", "0.2"]);
-    let mut node = start_node(&prefix, domain, &[]);
+    // Under a namespace of its own: --namespace is honoured.
+    let namespace = test_namespace(&prefix);
+    let topics = Topics::of(&namespace);
+    let mut node = start_node(&prefix, domain, &["--namespace", &namespace]);
     let mut echo = start_echo(&prefix, FRAMES as usize);
     let mut surfaces_echo = start_surfaces_echo(&prefix, FRAMES);
-    let mut listener = Listener::start(&python, domain, &[ESTIMATE, SURFACES, MARKERS]);
-    let early = listener.wait_matched(
-        &["rt/slope/estimate", "rt/slope/surfaces", "rt/slope/markers"],
-        30.0,
-    );
+    let specs = [
+        topics.estimate_spec(),
+        topics.surfaces_spec(),
+        topics.markers_spec(),
+    ];
+    let specs: Vec<&str> = specs.iter().map(String::as_str).collect();
+    let mut listener = Listener::start(&python, domain, &specs);
+    let early = listener.wait_matched(&[&topics.estimate, &topics.surfaces, &topics.markers], 30.0);
     assert!(early.is_empty(), "samples before any frame: {early:?}");
 
     let mut replay = replay_frames(&prefix, "ramp16", 5.0, FRAMES, 1);
@@ -548,11 +586,15 @@ fn every_estimate_reaches_cyclone_dds_in_order_with_the_values_echo_shows() {
         let Some(line) = listener.next(until) else {
             break;
         };
-        match line["topic"].as_str() {
-            Some("rt/slope/estimate") => received.push(line["message"].clone()),
-            Some("rt/slope/surfaces") => surfaces.push(line["message"].clone()),
-            Some("rt/slope/markers") => markers.push(line["message"].clone()),
-            _ => panic!("unexpected {line}"),
+        let topic = line["topic"].as_str().unwrap_or_default();
+        if topic == topics.estimate {
+            received.push(line["message"].clone());
+        } else if topic == topics.surfaces {
+            surfaces.push(line["message"].clone());
+        } else if topic == topics.markers {
+            markers.push(line["message"].clone());
+        } else {
+            panic!("unexpected {line}");
         }
     }
     assert_eq!(
@@ -614,15 +656,17 @@ fn a_late_subscriber_gets_the_last_estimates() {
     let prefix = unique_prefix("ros2-late");
     let domain = unique_domain();
     let _estimator = start_estimator(&prefix, &[]);
-    let mut node = start_node(&prefix, domain, &[]);
+    let namespace = test_namespace(&prefix);
+    let topics = Topics::of(&namespace);
+    let mut node = start_node(&prefix, domain, &["--namespace", &namespace]);
     let mut echo = start_echo(&prefix, 3);
     let mut replay = replay_frames(&prefix, "ramp16", 5.0, 3, 1);
     let echoed = read_json_lines(&mut echo, 3, 60.0);
     replay.assert_exits_zero_within(Duration::from_secs(30));
     assert!(!echoed.is_empty());
 
-    let mut listener = Listener::start(&python, domain, &[ESTIMATE]);
-    let mut received = listener.wait_matched(&["rt/slope/estimate"], 30.0);
+    let mut listener = Listener::start(&python, domain, &[&topics.estimate_spec()]);
+    let mut received = listener.wait_matched(&[&topics.estimate], 30.0);
     let until = deadline(20.0);
     while received.len() < echoed.len() {
         let Some(line) = listener.next(until) else {
@@ -753,6 +797,7 @@ fn every_health_report_becomes_a_diagnostic_at_the_health_rate() {
     let mut node = start_node(&prefix, domain, &[]);
     let mut listener = Listener::start(&python, domain, &[DIAGNOSTICS]);
     let mut received = listener.wait_matched(&["rt/diagnostics"], 30.0);
+    received.retain(|l| l["message"]["status"][0]["hardware_id"] == prefix.as_str());
     let reports = 16;
     let mut health = Proc::spawn(
         "slope-echo",
@@ -792,7 +837,11 @@ fn every_health_report_becomes_a_diagnostic_at_the_health_rate() {
             break;
         };
         assert_eq!(line["topic"], "rt/diagnostics", "{line}");
-        received.push(line);
+        // /diagnostics is global: only ours (another run on the same
+        // domain has another service prefix).
+        if line["message"]["status"][0]["hardware_id"] == prefix.as_str() {
+            received.push(line);
+        }
     }
     let diagnostics: Vec<&Value> = received.iter().map(|l| &l["message"]).collect();
     let mut levels = Vec::new();
@@ -875,20 +924,34 @@ fn the_mount_is_on_tf_static_for_late_listeners() {
     };
     let prefix = unique_prefix("ros2-tf");
     let domain = unique_domain();
+    // /tf_static is global: a camera frame of its own tells ours apart
+    // from another run's on the same domain.
+    let camera = format!("{}_camera", test_namespace(&prefix).trim_start_matches('/'));
     let dir = tempfile::tempdir().expect("temp dir");
     let config = dir.path().join("slope.toml");
     std::fs::write(
         &config,
-        "[mount]\nheight_m = 0.5\npitch_deg = -20.0\nroll_deg = 5.0\n[ros2]\nbase_frame = \"base_link\"\n",
+        format!(
+            "[mount]\nheight_m = 0.5\npitch_deg = -20.0\nroll_deg = 5.0\n[ros2]\n\
+             base_frame = \"base_link\"\nframe_id = \"{camera}\"\n"
+        ),
     )
     .expect("write the config");
     let config = config.to_str().expect("utf-8").to_string();
     let _node = start_node(&prefix, domain, &["--config", &config]);
     let topic = "rt/tf_static:TFMessage:reliable:transient_local";
     let mut listener = Listener::start(&python, domain, &[topic]);
+    let ours = |l: &Value| l["message"]["transforms"][0]["child_frame_id"] == camera.as_str();
     let mut lines = listener.wait_matched(&["rt/tf_static"], 30.0);
-    if lines.is_empty() {
-        lines.extend(listener.next(deadline(20.0)));
+    lines.retain(ours);
+    let until = deadline(20.0);
+    while lines.is_empty() {
+        let Some(line) = listener.next(until) else {
+            break;
+        };
+        if ours(&line) {
+            lines.push(line);
+        }
     }
     assert_eq!(lines.len(), 1, "{lines:?}");
     let transforms = lines[0]["message"]["transforms"]
@@ -897,7 +960,7 @@ fn the_mount_is_on_tf_static_for_late_listeners() {
     assert_eq!(transforms.len(), 1);
     let t = &transforms[0];
     assert_eq!(t["header"]["frame_id"], "base_link");
-    assert_eq!(t["child_frame_id"], "slope_camera");
+    assert_eq!(t["child_frame_id"], camera.as_str());
     let v = &t["transform"]["translation"];
     assert_eq!(
         [v["x"].as_f64(), v["y"].as_f64(), v["z"].as_f64()],
