@@ -1084,3 +1084,103 @@ fn the_node_speaks_the_notify_protocol_and_stops_cleanly() {
     );
     node.assert_exits_zero_within(Duration::from_secs(5));
 }
+
+/// An error in the estimator reaches `/diagnostics` as ERROR with its
+/// reason: a cloud whose header says fx = 0 is refused (the estimator
+/// counts an error, `last_error` names `fx`), and the next report's
+/// diagnostic is level 2, `error: ...fx...`, with `errors` 1.
+#[test]
+fn an_estimator_error_is_an_error_diagnostic() {
+    use slope_ipc_types::{CloudSource, Intrinsics, Mount, ServiceNames};
+    use slope_sensor::ipc::{create_node, CloudPublisher};
+    use slope_sensor::recording::DepthImage;
+    use slope_sensor::source::{SourceFrame, SourceInfo};
+
+    let Some(python) = venv_python() else {
+        return;
+    };
+    let prefix = unique_prefix("ros2-error");
+    let domain = unique_domain();
+    let _estimator = start_estimator(&prefix, &["--health-interval-s", "0.2"]);
+    let _node = start_node(&prefix, domain, &[]);
+    let mut listener = Listener::start(&python, domain, &[DIAGNOSTICS]);
+    listener.wait_matched(&["rt/diagnostics"], 30.0);
+
+    // A 64 x 48 wall 2 m away, from a camera whose header says fx = 0.
+    let (w, h) = (64, 48);
+    let info = SourceInfo {
+        width: w,
+        height: h,
+        intrinsics: Intrinsics {
+            fx: 0.0,
+            fy: 45.6,
+            cx: 31.5,
+            cy: 23.5,
+        },
+        unit_m: 0.001,
+        mount: Mount {
+            height_m: f64::NAN,
+            pitch_deg: f64::NAN,
+            roll_deg: f64::NAN,
+        },
+        source: CloudSource::Replay,
+        has_color: false,
+        sensor: "synthetic".into(),
+    };
+    let names = ServiceNames::new(prefix.clone());
+    let ipc = create_node("ros2-error-test").expect("node");
+    let publisher = CloudPublisher::create(&ipc, &names, &info, 10_000).expect("publisher");
+    let until = deadline(20.0);
+    while publisher.subscriber_count() == 0 {
+        assert!(Instant::now() < until, "the estimator never subscribed");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let now_ns = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .expect("after 1970")
+        .as_nanos() as u64;
+    publisher
+        .publish(&SourceFrame {
+            index: 0,
+            source_stamp_ns: now_ns,
+            capture_stamp_ns: now_ns,
+            depth: DepthImage {
+                width: w,
+                height: h,
+                data: vec![2000; (w * h) as usize],
+            },
+            color: None,
+        })
+        .expect("published");
+
+    let until = deadline(20.0);
+    let mut levels = Vec::new();
+    let error = loop {
+        let Some(line) = listener.next(until) else {
+            panic!("no ERROR diagnostic; levels seen {levels:?}");
+        };
+        let status = &line["message"]["status"][0];
+        if status["hardware_id"] != prefix.as_str() {
+            continue;
+        }
+        levels.push(status["level"].as_u64());
+        if status["level"] == 2 {
+            break status.clone();
+        }
+    };
+    let message = error["message"].as_str().expect("message");
+    assert!(
+        message.starts_with("error: ") && message.contains("`fx`"),
+        "{message}"
+    );
+    assert_eq!(diagnostic_value(&error, "errors"), Some("1"), "{error}");
+    assert!(
+        diagnostic_value(&error, "last_error").is_some_and(|e| e.contains("`fx`")),
+        "{error}"
+    );
+    // Idle reports before it were WARN (no clouds), never ERROR.
+    assert!(
+        levels[..levels.len() - 1].iter().all(|l| *l == Some(1)),
+        "{levels:?}"
+    );
+}
