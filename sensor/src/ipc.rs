@@ -43,9 +43,11 @@ pub const ESTIMATE_MAX_SUBSCRIBERS: usize = 16;
 pub const ESTIMATE_SUBSCRIBER_BUFFER: usize = 64;
 /// Most processes that may subscribe to the surfaces at once.
 pub const SURFACES_MAX_SUBSCRIBERS: usize = 16;
-/// Surfaces messages a subscriber may hold unread (about 0.5 s at 30 Hz;
-/// each is 3.2 kB).
-pub const SURFACES_SUBSCRIBER_BUFFER: usize = 16;
+/// Surfaces messages a subscriber may hold unread: as many as estimates
+/// (about 2 s at 30 Hz), so that a recorder that keeps every estimate
+/// keeps their surfaces too (each is 3.2 kB: 3.3 MB of shared memory for
+/// 16 subscribers).
+pub const SURFACES_SUBSCRIBER_BUFFER: usize = ESTIMATE_SUBSCRIBER_BUFFER;
 /// Daemons that may report on one health topic at once (estimator,
 /// capture or replay, and a spare for a second recorder or a test).
 pub const HEALTH_MAX_PUBLISHERS: usize = 4;

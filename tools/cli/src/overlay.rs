@@ -158,8 +158,11 @@ pub fn render_overlay(o: &Overlay<'_>) -> ColorImage {
         draw_segment(&mut image, *segment, oh, CORRIDOR_LINE);
     }
     draw_normals(&mut image, o.normals, w, h);
+    let mut placed = Vec::new();
     for surface in o.surfaces.iter().filter(|s| !s.label.is_empty()) {
-        draw_surface_label(&mut image, surface, w, h);
+        if let Some(label) = draw_surface_label(&mut image, surface, w, h, &placed) {
+            placed.push(label);
+        }
     }
     draw_caption(&mut image, oh, &o.caption);
     image
@@ -189,8 +192,14 @@ fn draw_segment(image: &mut ColorImage, segment: Segment, height: u32, colour: [
 }
 
 /// A surface's label on its own pixels, nearest its centroid, on a box of
-/// its colour.
-fn draw_surface_label(image: &mut ColorImage, surface: &SurfacePixels<'_>, w: usize, h: usize) {
+/// its colour, clear of the labels `placed` before where it can be; its box.
+fn draw_surface_label(
+    image: &mut ColorImage,
+    surface: &SurfacePixels<'_>,
+    w: usize,
+    h: usize,
+    placed: &[LabelBox],
+) -> Option<LabelBox> {
     let margin = (LABEL_PX * 0.25).round();
     let box_px = (
         text_width(&surface.label, LABEL_PX) + 2.0 * margin,
@@ -206,9 +215,7 @@ fn draw_surface_label(image: &mut ColorImage, surface: &SurfacePixels<'_>, w: us
         .iter()
         .flat_map(|p| p.iter().copied())
         .collect();
-    let Some(place) = label_anchor(&pixels, w, h, box_depth) else {
-        return;
-    };
+    let place = label_anchor(&pixels, w, h, box_depth, placed)?;
     // The text box centred in the depth-pixel box the anchor chose.
     let (u0, v0) = place.top_left;
     let x = u0 as f32 * SCALE as f32 + (box_depth.0 as f32 * SCALE as f32 - box_px.0) / 2.0;
@@ -222,6 +229,10 @@ fn draw_surface_label(image: &mut ColorImage, surface: &SurfacePixels<'_>, w: us
         surface_colour(surface.role),
         &surface.label,
     );
+    Some(LabelBox {
+        top_left: place.top_left,
+        size: box_depth,
+    })
 }
 
 /// Height of a caption of `lines` lines (the legend included), pixels.
@@ -296,6 +307,23 @@ fn draw_normals(image: &mut ColorImage, normals: &[NormalDot], w: usize, h: usiz
     }
 }
 
+/// A label's box in depth pixels: its top-left pixel and its size
+/// (columns, rows).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LabelBox {
+    pub top_left: (usize, usize),
+    pub size: (usize, usize),
+}
+
+impl LabelBox {
+    /// Whether the two boxes share a pixel.
+    pub fn overlaps(&self, other: &LabelBox) -> bool {
+        let apart = |a: usize, la: usize, b: usize, lb: usize| a + la <= b || b + lb <= a;
+        !(apart(self.top_left.0, self.size.0, other.top_left.0, other.size.0)
+            || apart(self.top_left.1, self.size.1, other.top_left.1, other.size.1))
+    }
+}
+
 /// Where a plane's label goes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct LabelPlace {
@@ -309,8 +337,10 @@ pub struct LabelPlace {
 /// Where a plane's label goes: the pixel `(u, v)` of `pixels` (on a
 /// `w` x `h` grid) on which a label box of `label` (columns, rows) centred
 /// there covers the most of the plane, nearest the plane's centroid among
-/// those whose box lies at least 90 % on the plane. The box stays
-/// [`LABEL_EDGE`] pixels inside the image where the image is large enough.
+/// those whose box lies at least 90 % on the plane; a box clear of the
+/// boxes `taken` (labels written before) first, wherever the plane has
+/// one. The box stays [`LABEL_EDGE`] pixels inside the image where the
+/// image is large enough.
 ///
 /// The centroid alone is not enough: a segment that wraps around another
 /// plane (the floor around a stair) or comes in two pieces has its
@@ -321,6 +351,7 @@ pub fn label_anchor(
     w: usize,
     h: usize,
     label: (usize, usize),
+    taken: &[LabelBox],
 ) -> Option<LabelPlace> {
     let mut mask = vec![false; w * h];
     let mut count = 0usize;
@@ -356,7 +387,7 @@ pub fn label_anchor(
     // where the image leaves room for it.
     let edge_u = LABEL_EDGE.min((w - bw) / 2);
     let edge_v = LABEL_EDGE.min((h - bh) / 2);
-    let mut best: Option<((f64, f64), LabelPlace)> = None;
+    let mut best: Option<((bool, f64, f64), LabelPlace)> = None;
     for (p, _) in mask.iter().enumerate().filter(|(_, &m)| m) {
         let (u, v) = (p % w, p / w);
         // The box's top-left, moved inside the allowed band.
@@ -368,7 +399,12 @@ pub fn label_anchor(
             - inside[v1 * (w + 1) + u0];
         let coverage = (f64::from(covered) / area).min(LABEL_COVERAGE);
         let distance = (u as f64 - centroid.0).powi(2) + (v as f64 - centroid.1).powi(2);
-        let key = (coverage, -distance);
+        let this = LabelBox {
+            top_left: (u0, v0),
+            size: (bw, bh),
+        };
+        let clear = !taken.iter().any(|t| t.overlaps(&this));
+        let key = (clear, coverage, -distance);
         if best.is_none_or(|(b, _)| key > b) {
             let place = LabelPlace {
                 pixel: (u, v),
@@ -545,7 +581,7 @@ mod tests {
         // The centroid (100, ~85) is on the stair between the legs.
         let (cu, cv) = (100u32, 85u32);
         assert!(!floor.contains(&(cv * 200 + cu)));
-        let place = label_anchor(&floor, w, h, label).expect("a place");
+        let place = label_anchor(&floor, w, h, label, &[]).expect("a place");
         let (u, v) = place.pixel;
         assert!(floor.contains(&((v * w + u) as u32)), "{place:?}");
         assert!(box_share(&floor, w, place, label) >= 0.9, "{place:?}");
@@ -556,7 +592,7 @@ mod tests {
         // the centroid between them: the label goes on the one it fits in.
         let mut pieces = rect(200, (0, 200), (0, 6));
         pieces.extend(rect(200, (60, 140), (110, 150)));
-        let place = label_anchor(&pieces, w, h, label).expect("a place");
+        let place = label_anchor(&pieces, w, h, label, &[]).expect("a place");
         let (u, v) = place.pixel;
         assert!(
             (60..140).contains(&u) && (110..150).contains(&v),
@@ -565,12 +601,75 @@ mod tests {
         assert!(box_share(&pieces, w, place, label) >= 0.9, "{place:?}");
         // A plane the label cannot fit in still gets a pixel of its own.
         let sliver = rect(200, (0, 200), (149, 150));
-        let place = label_anchor(&sliver, w, h, label).expect("a place");
+        let place = label_anchor(&sliver, w, h, label, &[]).expect("a place");
         assert_eq!(place.pixel.1, 149, "{place:?}");
         assert!(place.top_left.1 + label.1 <= h, "{place:?}");
         // Nothing on the grid: no place.
-        assert_eq!(label_anchor(&[1_000_000], w, h, label), None);
-        assert_eq!(label_anchor(&[], w, h, label), None);
+        assert_eq!(label_anchor(&[1_000_000], w, h, label, &[]), None);
+        assert_eq!(label_anchor(&[], w, h, label, &[]), None);
+    }
+
+    /// Two planes side by side in a band where both labels would go to the
+    /// same spot (the band is narrower than two boxes side by side but
+    /// tall): the second label moves along its plane, clear of the first;
+    /// with no room clear of it, it still gets its best place.
+    #[test]
+    fn a_label_keeps_clear_of_the_labels_before_it() {
+        let (w, h) = (200usize, 150usize);
+        let label = (40, 14);
+        let left = rect(200, (60, 100), (0, 150));
+        let right = rect(200, (100, 140), (0, 150));
+        let first = label_anchor(&left, w, h, label, &[]).expect("a place");
+        let first = LabelBox {
+            top_left: first.top_left,
+            size: label,
+        };
+        let alone = label_anchor(&right, w, h, label, &[]).expect("a place");
+        let alone = LabelBox {
+            top_left: alone.top_left,
+            size: label,
+        };
+        // Nearest their centroids, the two boxes overlap (the band is 80
+        // px wide for two boxes of 40 that each want its plane's centre).
+        let wide = (60, 14);
+        let a = label_anchor(&left, w, h, wide, &[]).expect("a place");
+        let b = label_anchor(&right, w, h, wide, &[]).expect("a place");
+        let (a, b) = (
+            LabelBox {
+                top_left: a.top_left,
+                size: wide,
+            },
+            LabelBox {
+                top_left: b.top_left,
+                size: wide,
+            },
+        );
+        assert!(a.overlaps(&b), "{a:?} {b:?}");
+        let moved = label_anchor(&right, w, h, wide, &[a]).expect("a place");
+        let moved = LabelBox {
+            top_left: moved.top_left,
+            size: wide,
+        };
+        assert!(!moved.overlaps(&a), "{moved:?} {a:?}");
+        assert!(box_share(&right, w, moved_place(moved), wide) >= 0.5);
+        // Boxes that fit side by side stay where they were.
+        assert!(!first.overlaps(&alone));
+        let kept = label_anchor(&right, w, h, label, &[first]).expect("a place");
+        assert_eq!(kept.top_left, alone.top_left);
+        // A plane with no place clear of a box covering it all: its best.
+        let cover = LabelBox {
+            top_left: (0, 0),
+            size: (w, h),
+        };
+        let stuck = label_anchor(&right, w, h, label, &[cover]).expect("a place");
+        assert_eq!(stuck.top_left, alone.top_left);
+    }
+
+    fn moved_place(b: LabelBox) -> LabelPlace {
+        LabelPlace {
+            pixel: b.top_left,
+            top_left: b.top_left,
+        }
     }
 
     #[test]
