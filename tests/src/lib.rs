@@ -150,8 +150,18 @@ impl Proc {
         I: IntoIterator<Item = S>,
         S: AsRef<std::ffi::OsStr>,
     {
+        Self::spawn_path_with_env(path, args, &[])
+    }
+
+    /// [`Self::spawn_path`] with the environment variables `env`.
+    pub fn spawn_path_with_env<I, S>(path: &Path, args: I, env: &[(&str, &std::ffi::OsStr)]) -> Proc
+    where
+        I: IntoIterator<Item = S>,
+        S: AsRef<std::ffi::OsStr>,
+    {
         let mut command = Command::new(path);
         command.args(args).env_remove("RUST_LOG");
+        command.envs(env.iter().copied());
         Self::start(&path.display().to_string(), command)
     }
 

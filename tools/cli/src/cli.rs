@@ -31,13 +31,30 @@ impl LogArgs {
     /// Sets up `tracing` to stderr (stdout stays free for results), in
     /// colour only when stderr is a terminal.
     pub fn init_logging(&self) {
+        self.init_logging_quieting(&[]);
+    }
+
+    /// [`Self::init_logging`] with the log of the crates `noisy` (a
+    /// library's own chatter, e.g. RustDDS's) off by default, its errors
+    /// at `-v`, everything at `-vv`. RUST_LOG overrides.
+    pub fn init_logging_quieting(&self, noisy: &[&str]) {
         let level = match (self.quiet, self.verbose) {
             (true, _) => "error",
             (false, 0) => "info",
             (false, 1) => "debug",
             (false, _) => "trace",
         };
-        let filter = EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new(level));
+        let noisy_level = match (self.quiet, self.verbose) {
+            (false, 1) => "error",
+            (false, 2..) => level,
+            _ => "off",
+        };
+        let mut directives = level.to_string();
+        for name in noisy {
+            directives.push_str(&format!(",{name}={noisy_level}"));
+        }
+        let filter =
+            EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new(&directives));
         // A second initialisation (only possible in tests) keeps the first.
         let _ = tracing_subscriber::fmt()
             .with_env_filter(filter)

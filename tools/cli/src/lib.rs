@@ -28,6 +28,7 @@ pub mod rejected_clouds;
 pub mod render;
 pub mod replay;
 pub mod ros2_messages;
+pub mod ros2_names;
 pub mod rosbag2_export;
 pub mod service_manager;
 pub mod surfaces_json;

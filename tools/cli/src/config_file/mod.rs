@@ -18,6 +18,9 @@
 //! method = "paper"
 //! [estimator.ransac]
 //! max_planes = 24
+//!
+//! [ros2]                     # the ROS 2 node (slope-ros2)
+//! namespace = "/robot1"
 //! ```
 //!
 //! Every daemon parses the whole file, so a typo anywhere is an error that
@@ -27,7 +30,7 @@
 //!
 //! One concern per file:
 //! - `sections.rs`: the sections and their defaults ([`SlopeFile`],
-//!   [`HealthSection`], [`CaptureSection`]);
+//!   [`HealthSection`], [`CaptureSection`], [`Ros2Section`]);
 //! - `parse.rs`: reading and writing the file, an old layout refused with
 //!   how to fix it;
 //! - `locate.rs`: where in the text a key or an error is (line, full path);
@@ -50,7 +53,7 @@ mod tests;
 mod validate;
 
 pub use error::ConfigFileError;
-pub use sections::{CaptureSection, HealthSection, SlopeFile, PIPELINES};
+pub use sections::{CaptureSection, HealthSection, Ros2Section, SlopeFile, PIPELINES};
 pub use validate::check_health_interval;
 
 /// The file the daemons read when not given `--config`, if it exists (the

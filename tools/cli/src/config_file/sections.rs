@@ -1,6 +1,6 @@
 //! The sections of the file and their defaults: [`SlopeFile`] (the whole
 //! file), `[health]` ([`HealthSection`]) and `[capture]`
-//! ([`CaptureSection`]); `[mount]` and `[estimator]` are types of the
+//! ([`CaptureSection`]), `[ros2]` ([`Ros2Section`]); `[mount]` and `[estimator]` are types of the
 //! sensor and pipeline crates.
 
 use serde::{Deserialize, Serialize};
@@ -24,6 +24,7 @@ pub struct SlopeFile {
     pub mount: MountInfo,
     pub capture: CaptureSection,
     pub estimator: EstimatorConfig,
+    pub ros2: Ros2Section,
 }
 
 impl Default for SlopeFile {
@@ -34,6 +35,7 @@ impl Default for SlopeFile {
             mount: MountInfo::default(),
             capture: CaptureSection::default(),
             estimator: EstimatorConfig::default(),
+            ros2: Ros2Section::default(),
         }
     }
 }
@@ -90,6 +92,37 @@ impl Default for CaptureSection {
             edge_aware_filter: true,
             color: true,
             frame_timeout_s: 3.0,
+        }
+    }
+}
+
+/// `[ros2]`: the ROS 2 node (`slope-ros2`); each key is also a flag of
+/// its own, which wins.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Ros2Section {
+    /// The node's namespace: topics are `<namespace>/slope/...`.
+    pub namespace: String,
+    pub node_name: String,
+    /// The DDS domain; unset: `ROS_DOMAIN_ID`, else 0.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub domain_id: Option<u16>,
+    /// The frame of every header: the camera's optical frame.
+    pub frame_id: String,
+    /// Publish the `[mount]` pose of the camera in this frame on
+    /// `/tf_static`; unset: none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub base_frame: Option<String>,
+}
+
+impl Default for Ros2Section {
+    fn default() -> Self {
+        Self {
+            namespace: "/".to_string(),
+            node_name: "slope_ros2".to_string(),
+            domain_id: None,
+            frame_id: "slope_camera".to_string(),
+            base_frame: None,
         }
     }
 }

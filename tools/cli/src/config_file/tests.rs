@@ -249,3 +249,28 @@ fn a_missing_default_file_means_the_defaults() {
     let err = SlopeFile::load(Some(&given)).expect_err("no such file");
     assert!(err.to_string().contains("other.toml"), "{err}");
 }
+
+#[test]
+fn the_ros2_section_is_read_and_its_names_checked_as_ros_2_does() {
+    let file = SlopeFile::from_toml_str(
+        "[ros2]\nnamespace = \"/robot1\"\ndomain_id = 7\nbase_frame = \"base_link\"\n",
+    )
+    .expect("valid");
+    assert_eq!(file.ros2.namespace, "/robot1");
+    assert_eq!(file.ros2.domain_id, Some(7));
+    assert_eq!(file.ros2.base_frame.as_deref(), Some("base_link"));
+    assert_eq!(file.ros2.frame_id, "slope_camera");
+    for (text, key) in [
+        ("namespace = \"robot1\"", "`ros2.namespace` = \"robot1\""),
+        ("node_name = \"slope-ros2\"", "`ros2.node_name`"),
+        (
+            "domain_id = 233",
+            "`ros2.domain_id` = 233: must be a DDS domain id from 0 to 232",
+        ),
+        ("frame_id = \"/cam\"", "`ros2.frame_id`"),
+        ("base_frame = \"base link\"", "`ros2.base_frame`"),
+    ] {
+        let err = refused(&format!("[ros2]\n{text}\n"));
+        assert!(err.contains(key), "{text}: {err}");
+    }
+}

@@ -5,9 +5,10 @@ use slope_ipc_types::DEFAULT_SERVICE_PREFIX;
 use slope_pipeline::config::ConfigError;
 
 use super::error::ConfigFileError;
-use super::sections::{CaptureSection, SlopeFile, PIPELINES};
+use super::sections::{CaptureSection, Ros2Section, SlopeFile, PIPELINES};
 use crate::cli::prefix_arg;
 use crate::replay::POSITIVE_RANGE;
+use crate::ros2_names::{check_domain_id, frame_id_arg, namespace_arg, node_name_arg};
 
 impl SlopeFile {
     /// Checks every value's range; the error names the first bad key.
@@ -38,6 +39,7 @@ impl SlopeFile {
         }
         self.validate_mount()?;
         self.capture.validate()?;
+        self.ros2.validate()?;
         self.estimator.validate().map_err(|e| match e {
             ConfigError::Invalid(invalid) => {
                 let invalid = invalid.in_section("estimator");
@@ -110,6 +112,39 @@ impl CaptureSection {
                 self.frame_timeout_s.to_string(),
                 format!("must be from {min} to {max} seconds"),
             );
+        }
+        Ok(())
+    }
+}
+
+impl Ros2Section {
+    fn validate(&self) -> Result<(), ConfigFileError> {
+        let bad = |key: &str, value: String, range: String| {
+            Err(ConfigFileError::OutOfRange {
+                key: format!("ros2.{key}"),
+                value,
+                range,
+            })
+        };
+        let quoted = |text: &str| format!("{text:?}");
+        if let Err(reason) = namespace_arg(&self.namespace) {
+            return bad("namespace", quoted(&self.namespace), reason);
+        }
+        if let Err(reason) = node_name_arg(&self.node_name) {
+            return bad("node_name", quoted(&self.node_name), reason);
+        }
+        if let Some(id) = self.domain_id {
+            if let Err(reason) = check_domain_id(id) {
+                return bad("domain_id", id.to_string(), reason);
+            }
+        }
+        for (key, frame) in [
+            ("frame_id", Some(&self.frame_id)),
+            ("base_frame", self.base_frame.as_ref()),
+        ] {
+            if let Some(Err(reason)) = frame.map(|f| frame_id_arg(f)) {
+                return bad(key, quoted(frame.map_or("", |f| f.as_str())), reason);
+            }
         }
         Ok(())
     }
