@@ -152,7 +152,7 @@ fn print_row(method: SlopeMethod, dir: &str, truth: Option<f64>, run: &Recording
     let st: Vec<String> = run
         .stages
         .iter()
-        .map(|(s, ms)| format!("{s} {:.1}", ms / n as f64))
+        .map(|(s, ms)| format!("{s} {:.2}", ms / n as f64))
         .collect();
     let mut failed: Vec<&str> = run
         .statuses
