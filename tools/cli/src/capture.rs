@@ -152,16 +152,18 @@ pub struct CaptureArgs {
 
 /// The settings in effect: the config file (`--config`, else
 /// [`DEFAULT_CONFIG_PATH`] if it exists), else the defaults, with the
-/// command line over them.
-pub fn effective_config(args: &CaptureArgs) -> anyhow::Result<SlopeFile> {
+/// command line over them. `None` when `stop` came while the file was read.
+pub fn effective_config(args: &CaptureArgs, stop: &StopFlag) -> anyhow::Result<Option<SlopeFile>> {
     let path = config_path(args.config.as_deref(), Path::new(DEFAULT_CONFIG_PATH));
-    let mut file = SlopeFile::load(path.as_deref())?;
+    let Some(mut file) = SlopeFile::load_or_stop(path.as_deref(), stop)? else {
+        return Ok(None);
+    };
     if let Some(path) = &path {
         tracing::info!(config = %path.display(), "settings loaded");
     }
     apply_flags(args, &mut file);
     file.validate().context("invalid settings")?;
-    Ok(file)
+    Ok(Some(file))
 }
 
 /// The command line's settings over the file's.
@@ -321,7 +323,9 @@ fn counters(stats: &CaptureStats) -> SourceCounters {
 /// out. Outside systemd the notifications go nowhere.
 pub fn run(args: &CaptureArgs, stop: &StopFlag) -> anyhow::Result<CaptureOutcome> {
     if args.print_config {
-        let file = effective_config(args)?;
+        let Some(file) = effective_config(args, stop)? else {
+            return Ok(CaptureOutcome::default());
+        };
         print!(
             "{}",
             file.to_toml()
@@ -347,7 +351,10 @@ fn capture(
     stop: &StopFlag,
     notifier: &SharedNotifier,
 ) -> anyhow::Result<CaptureOutcome> {
-    let file = effective_config(args)?;
+    let Some(file) = effective_config(args, stop)? else {
+        tracing::info!("stopped before the config file was read");
+        return Ok(CaptureOutcome::default());
+    };
     let options = resolve_options(args, &file)?;
     tracing::info!(
         device = ?options.device,

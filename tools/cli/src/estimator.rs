@@ -140,10 +140,12 @@ pub fn load_config(
 
 /// The settings in effect: the config file (`--config`, else
 /// [`DEFAULT_CONFIG_PATH`] if it exists), else the defaults, with the
-/// command line over them.
-pub fn effective_config(args: &EstimatorArgs) -> anyhow::Result<SlopeFile> {
+/// command line over them. `None` when `stop` came while the file was read.
+pub fn effective_config(args: &EstimatorArgs, stop: &StopFlag) -> anyhow::Result<Option<SlopeFile>> {
     let path = config_path(args.config.as_deref(), Path::new(DEFAULT_CONFIG_PATH));
-    let mut file = SlopeFile::load(path.as_deref())?;
+    let Some(mut file) = SlopeFile::load_or_stop(path.as_deref(), stop)? else {
+        return Ok(None);
+    };
     match &path {
         Some(path) => tracing::info!(config = %path.display(), "settings loaded"),
         None => tracing::info!("no {DEFAULT_CONFIG_PATH} and no --config: default settings"),
@@ -159,7 +161,7 @@ pub fn effective_config(args: &EstimatorArgs) -> anyhow::Result<SlopeFile> {
         file.estimator.threads = threads;
     }
     file.validate().context("invalid settings")?;
-    Ok(file)
+    Ok(Some(file))
 }
 
 /// What the estimator did.
@@ -190,7 +192,10 @@ fn estimate(
     stop: &StopFlag,
     manager: &mut ServiceManager,
 ) -> anyhow::Result<EstimatorStats> {
-    let file = effective_config(args)?;
+    let Some(file) = effective_config(args, stop)? else {
+        tracing::info!("stopped before the config file was read");
+        return Ok(EstimatorStats::default());
+    };
     if args.print_config {
         return print_config(&file);
     }
@@ -636,11 +641,14 @@ mod tests {
         )
         .expect("write");
         let file_arg = path.to_str().expect("utf-8");
-        let from_file = effective_config(&parse(&["--config", file_arg])).expect("valid");
+        let effective = |args: &EstimatorArgs| effective_config(args, &StopFlag::new());
+        let from_file = effective(&parse(&["--config", file_arg]))
+            .expect("valid")
+            .expect("not stopped");
         assert_eq!(from_file.service_prefix, "robot2");
         assert_eq!(from_file.health.interval_s, 5.0);
         assert_eq!(from_file.estimator.method, SlopeMethod::Tls);
-        let overridden = effective_config(&parse(&[
+        let overridden = effective(&parse(&[
             "--config",
             file_arg,
             "--service-prefix",
@@ -650,7 +658,8 @@ mod tests {
             "--method",
             "paper",
         ]))
-        .expect("valid");
+        .expect("valid")
+        .expect("not stopped");
         assert_eq!(overridden.service_prefix, "robot3");
         assert_eq!(overridden.health.interval_s, 0.0);
         assert_eq!(overridden.estimator.method, SlopeMethod::Paper);
@@ -659,7 +668,7 @@ mod tests {
             "what no flag sets stays the file's"
         );
         let missing = dir.path().join("missing.toml");
-        let err = effective_config(&parse(&["--config", missing.to_str().expect("utf-8")]))
+        let err = effective(&parse(&["--config", missing.to_str().expect("utf-8")]))
             .expect_err("no such file");
         assert!(format!("{err:#}").contains("missing.toml"), "{err:#}");
     }

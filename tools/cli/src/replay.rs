@@ -149,7 +149,13 @@ pub fn run(args: &ReplayArgs, stop: &StopFlag) -> anyhow::Result<PublishStats> {
         )
     })?;
     let mut source = RecordingSource::new(recording, args.looping);
-    let names = service_names(args)?;
+    let Some(names) = service_names(args, stop)? else {
+        tracing::info!("stopped before the config file was read");
+        return Ok(PublishStats {
+            stopped: true,
+            ..PublishStats::default()
+        });
+    };
     let node = create_node(&node_name("slope-replay"))?;
     let publisher = CloudPublisher::create(&node, &names, source.info(), args.max_points)?;
     let info = source.info();
@@ -232,13 +238,12 @@ fn check_carried_sensor_name(name: &str) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The service names: `--service-prefix`, else the config file's.
-fn service_names(args: &ReplayArgs) -> anyhow::Result<ServiceNames> {
+/// The service names: `--service-prefix`, else the config file's. `None`
+/// when `stop` came while the file was read.
+fn service_names(args: &ReplayArgs, stop: &StopFlag) -> anyhow::Result<Option<ServiceNames>> {
     let path = config_path(args.config.as_deref(), Path::new(DEFAULT_CONFIG_PATH));
-    let file = SlopeFile::load(path.as_deref())?;
-    Ok(ServiceNames::new(
-        args.common.prefix_or(&file.service_prefix),
-    ))
+    let file = SlopeFile::load_or_stop(path.as_deref(), stop)?;
+    Ok(file.map(|file| ServiceNames::new(args.common.prefix_or(&file.service_prefix))))
 }
 
 /// `--wait-subscribers`: at most the cloud topic's subscriber limit.

@@ -3,9 +3,13 @@
 //! named with their full path and line, a file of the old layout refused
 //! with how to fix it.
 
-use std::path::Path;
+use std::io;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
 
 use slope_sensor::input_file::{read_text, MAX_SETTINGS_BYTES};
+use slope_sensor::interruptible::run_interruptible;
+use slope_sensor::publish::StopFlag;
 
 use super::error::ConfigFileError;
 use super::locate::{first_line_of, key_path, line_of};
@@ -25,6 +29,10 @@ const ESTIMATOR_KEYS: [&str; 11] = [
     "road",
     "tracking",
 ];
+
+/// How often [`SlopeFile::load_or_stop`] looks at the stop request while
+/// the file is being read.
+pub const READ_SLICE: Duration = Duration::from_millis(50);
 
 impl SlopeFile {
     /// Parses and validates a file's text; missing keys keep their defaults.
@@ -50,7 +58,42 @@ impl SlopeFile {
             path: path.to_path_buf(),
             source,
         })?;
-        Self::from_toml_str(&text).map_err(|e| ConfigFileError::InFile {
+        Self::parse_file(path, &text)
+    }
+
+    /// [`Self::load`] for a daemon that has its stop request: the file is
+    /// read on a thread of its own, so a stop request ends the wait for a
+    /// read that blocks in the kernel (a config file on a stalled network
+    /// mount) within [`READ_SLICE`]. `Ok(None)` when `stop` came first.
+    pub fn load_or_stop(path: Option<&Path>, stop: &StopFlag) -> Result<Option<Self>, ConfigFileError> {
+        Self::load_with(path, stop, |path| read_text(path, MAX_SETTINGS_BYTES))
+    }
+
+    /// [`Self::load_or_stop`] with `read` for the file's text.
+    pub(super) fn load_with(
+        path: Option<&Path>,
+        stop: &StopFlag,
+        read: impl FnOnce(&Path) -> io::Result<String> + Send + 'static,
+    ) -> Result<Option<Self>, ConfigFileError> {
+        let Some(path) = path else {
+            return Ok(Some(Self::default()));
+        };
+        let read_error = |source| ConfigFileError::Read {
+            path: path.to_path_buf(),
+            source,
+        };
+        let owned: PathBuf = path.to_path_buf();
+        let text = run_interruptible("read-config", stop, READ_SLICE, &mut || {}, move || read(&owned))
+            .map_err(|err| read_error(io::Error::other(err)))?;
+        match text {
+            Some(text) => Self::parse_file(path, &text.map_err(read_error)?).map(Some),
+            None => Ok(None),
+        }
+    }
+
+    /// The text of the file `path`, parsed and validated.
+    fn parse_file(path: &Path, text: &str) -> Result<Self, ConfigFileError> {
+        Self::from_toml_str(text).map_err(|e| ConfigFileError::InFile {
             path: path.to_path_buf(),
             source: Box::new(e),
         })

@@ -274,3 +274,64 @@ fn the_ros2_section_is_read_and_its_names_checked_as_ros_2_does() {
         assert!(err.contains(key), "{text}: {err}");
     }
 }
+
+/// A read that blocks in the kernel (a stalled network mount) held a daemon
+/// past its stop request: the wait ends within a slice of the request, and
+/// the same load, unblocked, reads the file.
+#[test]
+fn a_stop_request_ends_the_wait_for_a_config_read_that_blocks() {
+    use std::sync::mpsc;
+    use std::time::{Duration, Instant};
+
+    use slope_sensor::publish::StopFlag;
+
+    let path = std::path::Path::new("/mnt/stalled/slope.toml");
+    let stop = StopFlag::new();
+    let (release, blocked) = mpsc::channel::<()>();
+    let stopper = stop.clone();
+    let requested = std::thread::spawn(move || {
+        std::thread::sleep(Duration::from_millis(200));
+        stopper.stop();
+        Instant::now()
+    });
+    let outcome = SlopeFile::load_with(Some(path), &stop, move |_| {
+        // Blocks until the test ends (the sender is dropped then).
+        let _ = blocked.recv();
+        Ok(String::new())
+    })
+    .expect("no error");
+    let waited_after_request = requested.join().expect("stopper").elapsed();
+    assert!(outcome.is_none(), "{outcome:?}");
+    assert!(
+        waited_after_request < Duration::from_secs(2),
+        "returned {waited_after_request:?} after the stop request"
+    );
+    drop(release);
+
+    let read = SlopeFile::load_with(Some(path), &StopFlag::new(), |_| {
+        Ok("[estimator]\nseed = 9\n".to_string())
+    })
+    .expect("valid")
+    .expect("not stopped");
+    assert_eq!(read.estimator.seed, 9);
+    let err = SlopeFile::load_with(Some(path), &StopFlag::new(), |_| {
+        Err(std::io::Error::other("stale file handle"))
+    })
+    .expect_err("a read error");
+    assert!(
+        chain_of(&err).contains("/mnt/stalled/slope.toml: stale file handle"),
+        "{}",
+        chain_of(&err)
+    );
+}
+
+/// `err` and its causes, joined by ": ".
+fn chain_of(err: &dyn std::error::Error) -> String {
+    let mut text = err.to_string();
+    let mut cause = err.source();
+    while let Some(next) = cause {
+        text.push_str(&format!(": {next}"));
+        cause = next.source();
+    }
+    text
+}

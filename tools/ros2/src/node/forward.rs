@@ -47,7 +47,13 @@ impl Ros2Stats {
 /// exit, `STOPPING=1` on the way out.
 pub fn run(args: &Ros2Args, stop: &StopFlag) -> anyhow::Result<Ros2Stats> {
     let mut manager = ServiceManager::from_env();
-    let result = Settings::of(args).and_then(|settings| serve(&settings, stop, &mut manager));
+    let result = Settings::of(args, stop).and_then(|settings| match settings {
+        Some(settings) => serve(&settings, stop, &mut manager),
+        None => {
+            tracing::info!("stopped before the config file was read");
+            Ok(Ros2Stats::default())
+        }
+    });
     if let Err(err) = &result {
         manager.status(&format!("failed: {err:#}").replace('\n', " "));
     }

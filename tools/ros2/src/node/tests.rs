@@ -4,6 +4,7 @@ use clap::{CommandFactory, Parser};
 
 use super::args::Ros2Args;
 use super::settings::Settings;
+use slope_sensor::publish::StopFlag;
 
 /// slope-ros2 speaks with the voice of every slope program
 /// (`slope_tools::flag_rules`).
@@ -20,7 +21,9 @@ fn settings(flags: &[&str], file: &str) -> Settings {
     let mut argv = vec!["slope-ros2", "--config", path.to_str().expect("utf-8")];
     argv.extend_from_slice(flags);
     let args = Ros2Args::try_parse_from(argv).expect("flags");
-    Settings::with_default_file(&args, &dir.path().join("none.toml")).expect("settings")
+    Settings::with_default_file(&args, &dir.path().join("none.toml"), &StopFlag::new())
+        .expect("settings")
+        .expect("not stopped")
 }
 
 #[test]
