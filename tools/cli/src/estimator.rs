@@ -141,7 +141,10 @@ pub fn load_config(
 /// The settings in effect: the config file (`--config`, else
 /// [`DEFAULT_CONFIG_PATH`] if it exists), else the defaults, with the
 /// command line over them. `None` when `stop` came while the file was read.
-pub fn effective_config(args: &EstimatorArgs, stop: &StopFlag) -> anyhow::Result<Option<SlopeFile>> {
+pub fn effective_config(
+    args: &EstimatorArgs,
+    stop: &StopFlag,
+) -> anyhow::Result<Option<SlopeFile>> {
     let path = config_path(args.config.as_deref(), Path::new(DEFAULT_CONFIG_PATH));
     let Some(mut file) = SlopeFile::load_or_stop(path.as_deref(), stop)? else {
         return Ok(None);

@@ -65,7 +65,10 @@ impl SlopeFile {
     /// read on a thread of its own, so a stop request ends the wait for a
     /// read that blocks in the kernel (a config file on a stalled network
     /// mount) within [`READ_SLICE`]. `Ok(None)` when `stop` came first.
-    pub fn load_or_stop(path: Option<&Path>, stop: &StopFlag) -> Result<Option<Self>, ConfigFileError> {
+    pub fn load_or_stop(
+        path: Option<&Path>,
+        stop: &StopFlag,
+    ) -> Result<Option<Self>, ConfigFileError> {
         Self::load_with(path, stop, |path| read_text(path, MAX_SETTINGS_BYTES))
     }
 
@@ -83,8 +86,10 @@ impl SlopeFile {
             source,
         };
         let owned: PathBuf = path.to_path_buf();
-        let text = run_interruptible("read-config", stop, READ_SLICE, &mut || {}, move || read(&owned))
-            .map_err(|err| read_error(io::Error::other(err)))?;
+        let text = run_interruptible("read-config", stop, READ_SLICE, &mut || {}, move || {
+            read(&owned)
+        })
+        .map_err(|err| read_error(io::Error::other(err)))?;
         match text {
             Some(text) => Self::parse_file(path, &text.map_err(read_error)?).map(Some),
             None => Ok(None),
