@@ -64,7 +64,7 @@ impl SlopeFile {
     /// [`Self::load`] for a daemon that has its stop request: the file is
     /// read on a thread of its own, so a stop request ends the wait for a
     /// read that blocks in the kernel (a config file on a stalled network
-    /// mount) within [`READ_SLICE`]. `Ok(None)` when `stop` came first.
+    /// mount) within 50 ms (`READ_SLICE`). `Ok(None)` when `stop` came first.
     pub fn load_or_stop(
         path: Option<&Path>,
         stop: &StopFlag,
