@@ -193,7 +193,11 @@ pub fn publish_stream_observed(
         }
         match source.next_frame(&mut frame) {
             Ok(true) => {}
-            Ok(false) => break,
+            // A source whose read a stop request cut short ends too.
+            Ok(false) => {
+                stats.stopped = stop.is_stopped();
+                break;
+            }
             Err(err @ SourceError::BadFrame { row, .. }) if options.skip_bad_frames => {
                 stats.skipped_bad += 1;
                 // One warning per bad frame per run: a loop meets it again

@@ -4,10 +4,14 @@
 //! ([`crate::publish::publish_stream`]).
 
 use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Duration;
 
 use slope_ipc_types::{CloudSource, Intrinsics, Mount};
 
-use crate::recording::{ColorImage, DepthImage, Recording, RecordingError};
+use crate::interruptible::{run_interruptible, InterruptibleError};
+use crate::publish::StopFlag;
+use crate::recording::{ColorImage, DepthImage, FrameEntry, Recording, RecordingError};
 
 /// What a source produces, fixed for the whole stream.
 #[derive(Debug, Clone, PartialEq)]
@@ -70,6 +74,9 @@ pub enum SourceError {
         #[source]
         source: RecordingError,
     },
+    /// The thread that reads a frame's images could not run.
+    #[error(transparent)]
+    Reader(#[from] InterruptibleError),
     /// The Kinect v2 failed in a way the source cannot recover from.
     #[cfg(feature = "kinect2")]
     #[error(transparent)]
@@ -100,7 +107,10 @@ pub trait FrameSource {
 /// stream with the recording's own gaps. A pass that would overflow the
 /// 64-bit index or stamp ends the stream instead.
 pub struct RecordingSource {
-    recording: Recording,
+    recording: Arc<Recording>,
+    /// With a stop request, each frame's images are read on a thread of
+    /// their own ([`RecordingSource::stop_reads_on`]).
+    stop: Option<StopFlag>,
     info: SourceInfo,
     next: usize,
     pass: u64,
@@ -148,7 +158,8 @@ impl RecordingSource {
             _ => 0,
         };
         Self {
-            recording,
+            recording: Arc::new(recording),
+            stop: None,
             info,
             next: 0,
             pass: 0,
@@ -160,8 +171,42 @@ impl RecordingSource {
         }
     }
 
+    /// Reads each frame's images on a thread of its own, so that `stop`
+    /// ends the wait for a read that blocks (a recording on a stalled
+    /// network mount) within [`READ_SLICE`]: [`FrameSource::next_frame`]
+    /// then answers the end of the stream. Without it the reads block the
+    /// caller.
+    pub fn stop_reads_on(mut self, stop: StopFlag) -> Self {
+        self.stop = Some(stop);
+        self
+    }
+
     pub fn recording(&self) -> &Recording {
         &self.recording
+    }
+
+    /// The depth image of `entry` into `frame.depth` and its colour image,
+    /// on a thread of its own when [`Self::stop_reads_on`] was given: `None`
+    /// when the stop request came first.
+    fn read_images(
+        &self,
+        entry: &FrameEntry,
+        frame: &mut SourceFrame,
+    ) -> Result<Option<ImagesRead>, SourceError> {
+        let Some(stop) = &self.stop else {
+            return Ok(Some(read_images(&self.recording, entry, &mut frame.depth)));
+        };
+        let recording = Arc::clone(&self.recording);
+        let entry = entry.clone();
+        let mut depth = std::mem::take(&mut frame.depth);
+        let read = run_interruptible("read-frame", stop, READ_SLICE, &mut || {}, move || {
+            let read = read_images(&recording, &entry, &mut depth);
+            (depth, read)
+        })?;
+        Ok(read.map(|(depth, read)| {
+            frame.depth = depth;
+            read
+        }))
     }
 
     /// Number of frames in one pass.
@@ -202,7 +247,8 @@ impl FrameSource for RecordingSource {
         ) else {
             return Ok(false);
         };
-        let entry = &self.recording.frames()[self.next];
+        let recording = Arc::clone(&self.recording);
+        let entry = &recording.frames()[self.next];
         let (Some(index), Some(stamp)) = (
             entry.index.checked_add(index_offset),
             entry.timestamp_ns.checked_add(stamp_offset),
@@ -213,16 +259,17 @@ impl FrameSource for RecordingSource {
         let bad = |source: RecordingError| SourceError::BadFrame {
             index: entry.index,
             row: entry.row,
-            file: self.recording.dir().join("frames.csv"),
+            file: recording.dir().join("frames.csv"),
             source,
         };
-        self.recording
-            .read_depth_into(entry, &mut frame.depth)
-            .map_err(bad)?;
+        let Some((depth, color)) = self.read_images(entry, frame)? else {
+            return Ok(false);
+        };
+        depth.map_err(bad)?;
         // The colour is optional: a frame whose colour image cannot be read
         // is published without it (rgb 0), as slope-eval and slope-convert
         // read it.
-        frame.color = match self.recording.read_color(entry) {
+        frame.color = match color {
             Ok(color) => color,
             Err(err) => {
                 self.bad_colors += 1;
@@ -243,6 +290,27 @@ impl FrameSource for RecordingSource {
         self.good_in_pass = true;
         Ok(true)
     }
+}
+
+/// How often a frame read on its own thread looks at the stop request.
+pub const READ_SLICE: Duration = Duration::from_millis(50);
+
+/// What reading a frame's images gave: the depth image's outcome (it is
+/// read into a buffer of the caller's), then the colour image.
+type ImagesRead = (
+    Result<(), RecordingError>,
+    Result<Option<ColorImage>, RecordingError>,
+);
+
+/// The depth image of `entry` into `depth`, then its colour image.
+fn read_images(recording: &Recording, entry: &FrameEntry, depth: &mut DepthImage) -> ImagesRead {
+    let depth_read = recording.read_depth_into(entry, depth);
+    let color = if depth_read.is_ok() {
+        recording.read_color(entry)
+    } else {
+        Ok(None)
+    };
+    (depth_read, color)
 }
 
 #[cfg(test)]
@@ -290,6 +358,40 @@ mod tests {
             out.push((frame.index, frame.source_stamp_ns));
         }
         out
+    }
+
+    /// Read on their own thread (`stop_reads_on`), the frames are those read
+    /// on the caller's; once the stop request is there, the stream ends
+    /// without another read.
+    #[test]
+    fn frames_read_on_their_own_thread_are_the_same_and_a_stop_ends_the_stream() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let rows =
+            "index,timestamp_ns,depth,color\n0,0,depth/000000.png,\n1,100,depth/000001.png,\n";
+        let frames = |source: &mut RecordingSource| {
+            let mut frame = SourceFrame::default();
+            let mut out = Vec::new();
+            while out.len() < 3 && source.next_frame(&mut frame).expect("frame") {
+                out.push((frame.index, frame.source_stamp_ns, frame.depth.clone()));
+            }
+            out
+        };
+        let mut inline =
+            RecordingSource::new(recording_with_rows(&dir.path().join("a"), rows), true);
+        let stop = StopFlag::new();
+        let mut threaded =
+            RecordingSource::new(recording_with_rows(&dir.path().join("b"), rows), true)
+                .stop_reads_on(stop.clone());
+        let expected = frames(&mut inline);
+        assert_eq!(expected.len(), 3);
+        assert_eq!(expected[0].2.data, vec![1000, 0, 2000, 3000]);
+        assert_eq!(frames(&mut threaded), expected);
+        stop.stop();
+        let mut frame = SourceFrame::default();
+        assert!(
+            !threaded.next_frame(&mut frame).expect("no error"),
+            "stopped: the end"
+        );
     }
 
     #[test]

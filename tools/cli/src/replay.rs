@@ -148,7 +148,7 @@ pub fn run(args: &ReplayArgs, stop: &StopFlag) -> anyhow::Result<PublishStats> {
             args.recording.display()
         )
     })?;
-    let mut source = RecordingSource::new(recording, args.looping);
+    let mut source = RecordingSource::new(recording, args.looping).stop_reads_on(stop.clone());
     let Some(names) = service_names(args, stop)? else {
         tracing::info!("stopped before the config file was read");
         return Ok(PublishStats {
