@@ -5,6 +5,7 @@
 pub mod cloud_checks;
 pub mod device_lock;
 pub mod error_chain;
+pub mod frame_reads;
 pub mod input_file;
 pub mod interruptible;
 pub mod ipc;

@@ -4,14 +4,13 @@
 //! ([`crate::publish::publish_stream`]).
 
 use std::path::PathBuf;
-use std::sync::Arc;
-use std::time::Duration;
 
 use slope_ipc_types::{CloudSource, Intrinsics, Mount};
 
-use crate::interruptible::{run_interruptible, InterruptibleError};
+use crate::frame_reads::{read_frame_images, Colour};
+use crate::interruptible::InterruptibleError;
 use crate::publish::StopFlag;
-use crate::recording::{ColorImage, DepthImage, FrameEntry, Recording, RecordingError};
+use crate::recording::{ColorImage, DepthImage, Recording, RecordingError};
 
 /// What a source produces, fixed for the whole stream.
 #[derive(Debug, Clone, PartialEq)]
@@ -107,7 +106,7 @@ pub trait FrameSource {
 /// stream with the recording's own gaps. A pass that would overflow the
 /// 64-bit index or stamp ends the stream instead.
 pub struct RecordingSource {
-    recording: Arc<Recording>,
+    recording: Recording,
     /// With a stop request, each frame's images are read on a thread of
     /// their own ([`RecordingSource::stop_reads_on`]).
     stop: Option<StopFlag>,
@@ -158,7 +157,7 @@ impl RecordingSource {
             _ => 0,
         };
         Self {
-            recording: Arc::new(recording),
+            recording,
             stop: None,
             info,
             next: 0,
@@ -173,7 +172,7 @@ impl RecordingSource {
 
     /// Reads each frame's images on a thread of its own, so that `stop`
     /// ends the wait for a read that blocks (a recording on a stalled
-    /// network mount) within [`READ_SLICE`]: [`FrameSource::next_frame`]
+    /// network mount) within [`crate::frame_reads::READ_SLICE`]: [`FrameSource::next_frame`]
     /// then answers the end of the stream. Without it the reads block the
     /// caller.
     pub fn stop_reads_on(mut self, stop: StopFlag) -> Self {
@@ -183,30 +182,6 @@ impl RecordingSource {
 
     pub fn recording(&self) -> &Recording {
         &self.recording
-    }
-
-    /// The depth image of `entry` into `frame.depth` and its colour image,
-    /// on a thread of its own when [`Self::stop_reads_on`] was given: `None`
-    /// when the stop request came first.
-    fn read_images(
-        &self,
-        entry: &FrameEntry,
-        frame: &mut SourceFrame,
-    ) -> Result<Option<ImagesRead>, SourceError> {
-        let Some(stop) = &self.stop else {
-            return Ok(Some(read_images(&self.recording, entry, &mut frame.depth)));
-        };
-        let recording = Arc::clone(&self.recording);
-        let entry = entry.clone();
-        let mut depth = std::mem::take(&mut frame.depth);
-        let read = run_interruptible("read-frame", stop, READ_SLICE, &mut || {}, move || {
-            let read = read_images(&recording, &entry, &mut depth);
-            (depth, read)
-        })?;
-        Ok(read.map(|(depth, read)| {
-            frame.depth = depth;
-            read
-        }))
     }
 
     /// Number of frames in one pass.
@@ -247,7 +222,7 @@ impl FrameSource for RecordingSource {
         ) else {
             return Ok(false);
         };
-        let recording = Arc::clone(&self.recording);
+        let recording = self.recording.clone();
         let entry = &recording.frames()[self.next];
         let (Some(index), Some(stamp)) = (
             entry.index.checked_add(index_offset),
@@ -262,14 +237,17 @@ impl FrameSource for RecordingSource {
             file: recording.dir().join("frames.csv"),
             source,
         };
-        let Some((depth, color)) = self.read_images(entry, frame)? else {
+        let stop = self.stop.as_ref();
+        let Some(images) =
+            read_frame_images(&recording, entry, &mut frame.depth, Colour::Read, stop)?
+        else {
             return Ok(false);
         };
-        depth.map_err(bad)?;
+        images.depth.map_err(bad)?;
         // The colour is optional: a frame whose colour image cannot be read
         // is published without it (rgb 0), as slope-eval and slope-convert
         // read it.
-        frame.color = match color {
+        frame.color = match images.color {
             Ok(color) => color,
             Err(err) => {
                 self.bad_colors += 1;
@@ -290,27 +268,6 @@ impl FrameSource for RecordingSource {
         self.good_in_pass = true;
         Ok(true)
     }
-}
-
-/// How often a frame read on its own thread looks at the stop request.
-pub const READ_SLICE: Duration = Duration::from_millis(50);
-
-/// What reading a frame's images gave: the depth image's outcome (it is
-/// read into a buffer of the caller's), then the colour image.
-type ImagesRead = (
-    Result<(), RecordingError>,
-    Result<Option<ColorImage>, RecordingError>,
-);
-
-/// The depth image of `entry` into `depth`, then its colour image.
-fn read_images(recording: &Recording, entry: &FrameEntry, depth: &mut DepthImage) -> ImagesRead {
-    let depth_read = recording.read_depth_into(entry, depth);
-    let color = if depth_read.is_ok() {
-        recording.read_color(entry)
-    } else {
-        Ok(None)
-    };
-    (depth_read, color)
 }
 
 #[cfg(test)]

@@ -3,6 +3,7 @@
 
 use std::io::{self, BufReader};
 use std::path::{Component, Path, PathBuf};
+use std::sync::Arc;
 
 use png::{BitDepth, ColorType};
 use slope_ipc_types::{Intrinsics, Mount};
@@ -33,11 +34,14 @@ pub struct FrameEntry {
 
 /// A recording opened from disk: metadata and frame table validated, images
 /// decoded when asked for.
+///
+/// Cloning is cheap (the frame table is shared): a frame's images can be
+/// read on another thread ([`crate::frame_reads`]).
 #[derive(Debug, Clone)]
 pub struct Recording {
     dir: PathBuf,
     meta: RecordingMeta,
-    frames: Vec<FrameEntry>,
+    frames: Arc<[FrameEntry]>,
 }
 
 impl Recording {
@@ -71,7 +75,7 @@ impl Recording {
         Ok(Recording {
             dir: dir.to_path_buf(),
             meta,
-            frames,
+            frames: frames.into(),
         })
     }
 

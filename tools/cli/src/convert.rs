@@ -15,7 +15,8 @@ use clap::Parser;
 use slope_ipc_types::{CloudPoint, SlopeEstimate, Surfaces, DEFAULT_MAX_CLOUD_POINTS};
 use slope_pipeline::{CloudView, Estimator, FrameInfo};
 use slope_sensor::error_chain::ErrorChain;
-use slope_sensor::recording::{ColorImage, DepthImage, FrameEntry, Recording};
+use slope_sensor::frame_reads::{read_frame_images, Colour};
+use slope_sensor::recording::{ColorImage, DepthImage, FrameEntry, Recording, RecordingError};
 
 use slope_sensor::publish::StopFlag;
 
@@ -192,7 +193,16 @@ fn convert_frames(
             });
             break;
         }
-        if let Err(err) = recording.read_depth_into(frame, &mut depth) {
+        // On a thread of its own: a stop request ends a read that blocks.
+        let images = read_frame_images(recording, frame, &mut depth, Colour::Read, Some(stop))?;
+        let Some(images) = images else {
+            stats.interrupted = Some(Interruption {
+                frames_done: done,
+                frames_total: total,
+            });
+            break;
+        };
+        if let Err(err) = images.depth {
             tracing::warn!(
                 frame = frame.index,
                 "skipping a bad frame: {}",
@@ -201,7 +211,7 @@ fn convert_frames(
             stats.bad_frames += 1;
             continue;
         }
-        let color = read_color(recording, frame, &mut stats);
+        let color = colour_or_none(images.color, frame, &mut stats);
         projector.project_into(
             &depth.data,
             color.as_ref().map(|c| &c.data[..]),
@@ -305,16 +315,16 @@ fn log_summary(args: &ConvertArgs, stats: &ConvertStats) {
     );
 }
 
-/// The colour image of `frame`, registered to its depth image (the
-/// recording format's colour/), or `None`: none in frames.csv, or one that
-/// cannot be read (a warning, counted in `stats.bad_colors`; the frame is
-/// converted with rgb 0, as without colour).
-fn read_color(
-    recording: &Recording,
+/// The colour image of `frame` as `read` (registered to its depth image:
+/// the recording format's colour/), or `None`: none in frames.csv, or one
+/// that could not be read (a warning, counted in `stats.bad_colors`; the
+/// frame is converted with rgb 0, as without colour).
+fn colour_or_none(
+    read: Result<Option<ColorImage>, RecordingError>,
     frame: &FrameEntry,
     stats: &mut ConvertStats,
 ) -> Option<ColorImage> {
-    match recording.read_color(frame) {
+    match read {
         Ok(color) => color,
         Err(err) => {
             tracing::warn!(

@@ -6,6 +6,7 @@ use indicatif::ProgressBar;
 use slope_ipc_types::{CloudPoint, EstimateStatus};
 use slope_pipeline::{CloudView, Estimator, FrameInfo};
 use slope_sensor::error_chain::ErrorChain;
+use slope_sensor::frame_reads::{read_frame_images, Colour};
 use slope_sensor::publish::StopFlag;
 use slope_sensor::recording::{DepthImage, FrameEntry, Recording};
 
@@ -51,12 +52,18 @@ pub(super) fn evaluate_recording(
         if stop.is_stopped() {
             break;
         }
-        evaluated += 1;
         let wanted = target.artifacts.wants(position, frame.index, frames.len());
         let truth_deg = recording.truth_deg(frame);
-        match recording.read_depth_into(frame, &mut depth) {
-            Err(err) => {
-                let error = ErrorChain(&err).to_string();
+        // On a thread of its own: a stop request ends a read that blocks.
+        let read = read_frame_images(recording, frame, &mut depth, Colour::Skip, Some(stop));
+        let read = match read {
+            Ok(Some(images)) => images.depth.map_err(|err| ErrorChain(&err).to_string()),
+            Ok(None) => break,
+            Err(err) => Err(err.to_string()),
+        };
+        evaluated += 1;
+        match read {
+            Err(error) => {
                 tally.bad_frame(frame.index, truth_deg, wanted, error);
             }
             Ok(()) => {
