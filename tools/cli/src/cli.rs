@@ -113,17 +113,22 @@ impl CommonArgs {
     /// of `--service-prefix` (or its environment variable), else the
     /// daemons' `service_prefix` in /etc/slope/slope.toml when that file
     /// exists, else "slope"; so a client started by hand finds the daemons
-    /// the file configures. A file that cannot be read is an error.
-    pub fn service_names(&self) -> anyhow::Result<ServiceNames> {
-        self.service_names_from(Path::new(DEFAULT_CONFIG_PATH))
+    /// the file configures. A file that cannot be read is an error, and so
+    /// is a stop request while it is read ([`read_settings`]).
+    pub fn service_names(&self, stop: &StopFlag) -> anyhow::Result<ServiceNames> {
+        self.service_names_from(Path::new(DEFAULT_CONFIG_PATH), stop)
     }
 
     /// [`Self::service_names`] with `default` for /etc/slope/slope.toml.
-    pub fn service_names_from(&self, default: &Path) -> anyhow::Result<ServiceNames> {
+    pub fn service_names_from(
+        &self,
+        default: &Path,
+        stop: &StopFlag,
+    ) -> anyhow::Result<ServiceNames> {
         if let Some(prefix) = &self.service_prefix {
             return Ok(ServiceNames::new(prefix.clone()));
         }
-        let file = SlopeFile::load(config_path(None, default).as_deref())?;
+        let file = read_settings(config_path(None, default).as_deref(), stop)?;
         Ok(ServiceNames::new(file.service_prefix))
     }
 
@@ -201,6 +206,15 @@ pub fn open_recording(
         anyhow::bail!("its frames.csv lists no frames");
     }
     Ok(recording)
+}
+
+/// The config file `path` (the defaults for `None`), read on a thread of
+/// its own ([`SlopeFile::load_or_stop`]): a stop request while it is read
+/// (a stalled network mount) is an error that says so.
+pub fn read_settings(path: Option<&Path>, stop: &StopFlag) -> anyhow::Result<SlopeFile> {
+    SlopeFile::load_or_stop(path, stop)?.ok_or_else(|| {
+        anyhow::anyhow!("stopped before the config file could be read (a stop request came first)")
+    })
 }
 
 /// How often a wait for a blocked open looks at the stop request.
@@ -535,19 +549,25 @@ mod tests {
         let file = dir.path().join("slope.toml");
         let missing = dir.path().join("missing.toml");
         // No file: the default prefix.
-        let names = common(None).service_names_from(&missing).expect("names");
+        let names = common(None)
+            .service_names_from(&missing, &StopFlag::new())
+            .expect("names");
         assert_eq!(names.prefix(), DEFAULT_SERVICE_PREFIX);
         // The file's prefix, unless the flag gives one.
         std::fs::write(&file, "service_prefix = \"robot7\"\n").expect("write");
-        let names = common(None).service_names_from(&file).expect("names");
+        let names = common(None)
+            .service_names_from(&file, &StopFlag::new())
+            .expect("names");
         assert_eq!(names.prefix(), "robot7");
         let names = common(Some("lab"))
-            .service_names_from(&file)
+            .service_names_from(&file, &StopFlag::new())
             .expect("names");
         assert_eq!(names.prefix(), "lab");
         // A broken file is an error that names it, not a silent default.
         std::fs::write(&file, "service_prefx = \"robot7\"\n").expect("write");
-        let e = common(None).service_names_from(&file).unwrap_err();
+        let e = common(None)
+            .service_names_from(&file, &StopFlag::new())
+            .unwrap_err();
         let report = error_report(&e);
         assert!(report.contains("slope.toml"), "{report}");
         assert!(report.contains("service_prefx"), "{report}");

@@ -152,7 +152,7 @@ pub fn run(args: &ConvertArgs, stop: &StopFlag) -> anyhow::Result<ConvertStats> 
     let recording = open_recording(&args.recording, args.max_points, stop)
         .with_context(|| format!("cannot convert {}", args.recording.display()))?;
     let config =
-        load_config(args.config.as_ref(), args.method)?.for_sensor(&recording.meta().sensor);
+        load_config(args.config.as_ref(), args.method, stop)?.for_sensor(&recording.meta().sensor);
     let mut estimator = (!args.no_estimates).then(|| Estimator::new(config));
     let mut exporter = FrameExporter::create_replacing(
         args.format,

@@ -252,7 +252,7 @@ fn tracked_text(e: &SlopeEstimate) -> String {
 }
 
 pub fn run(args: &EchoArgs, stop: &StopFlag) -> anyhow::Result<u64> {
-    let names = args.common.service_names()?;
+    let names = args.common.service_names(stop)?;
     let node = create_node(&node_name("slope-echo"))?;
     if args.health {
         let subscriber = HealthSubscriber::create(&node, &names)?;

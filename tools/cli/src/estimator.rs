@@ -23,7 +23,7 @@ use slope_sensor::ipc::{
 };
 use slope_sensor::publish::StopFlag;
 
-use crate::cli::{max_frames_arg, node_name, wait_loop, CommonArgs, SilenceNote};
+use crate::cli::{max_frames_arg, node_name, read_settings, wait_loop, CommonArgs, SilenceNote};
 use crate::config_file::{check_health_interval, config_path, SlopeFile, DEFAULT_CONFIG_PATH};
 use crate::health::HealthReporter;
 use crate::rejected_clouds::RejectedClouds;
@@ -126,12 +126,13 @@ pub fn method_arg(text: &str) -> Result<SlopeMethod, String> {
 
 /// The estimator parameters of a config file (its `[estimator]`), or the
 /// defaults without one, with `method` over them: what slope-eval and
-/// slope-convert run.
+/// slope-convert run. The file is read as [`read_settings`] reads it.
 pub fn load_config(
     path: Option<&PathBuf>,
     method: Option<SlopeMethod>,
+    stop: &StopFlag,
 ) -> anyhow::Result<EstimatorConfig> {
-    let mut config = SlopeFile::load(path.map(PathBuf::as_path))?.estimator;
+    let mut config = read_settings(path.map(PathBuf::as_path), stop)?.estimator;
     if let Some(method) = method {
         config.method = method;
     }

@@ -29,7 +29,7 @@ pub struct BridgeStats {
 /// of `args`' service prefix to Zenoh until `stop` is set; returns how many
 /// were forwarded.
 pub fn run(args: &BridgeArgs, stop: &StopFlag) -> anyhow::Result<BridgeStats> {
-    let names = args.common.service_names()?;
+    let names = args.common.service_names(stop)?;
     let key_prefix = key_prefix(args, names.prefix())?;
     let config = zenoh_config(args)?;
     let network = Network::of(&config);

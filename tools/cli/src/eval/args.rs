@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use clap::{ArgGroup, Parser};
 use slope_ipc_types::{SlopeMethod, DEFAULT_MAX_CLOUD_POINTS};
 use slope_pipeline::EstimatorConfig;
+use slope_sensor::publish::StopFlag;
 
 use crate::cli::{count_arg, max_frames_arg, LogArgs};
 use crate::estimator::{load_config, method_arg};
@@ -163,7 +164,7 @@ pub fn method_choice_arg(text: &str) -> Result<MethodChoice, String> {
 
 /// The estimator configurations `args` asks for, one per method, in the
 /// order of [`SlopeMethod::ALL`] for `--method all`.
-pub fn configs(args: &EvalArgs) -> anyhow::Result<Vec<EstimatorConfig>> {
+pub fn configs(args: &EvalArgs, stop: &StopFlag) -> anyhow::Result<Vec<EstimatorConfig>> {
     let methods: Vec<Option<SlopeMethod>> = match args.method {
         None => vec![None],
         Some(MethodChoice::One(method)) => vec![Some(method)],
@@ -177,7 +178,7 @@ pub fn configs(args: &EvalArgs) -> anyhow::Result<Vec<EstimatorConfig>> {
                     method: method.unwrap_or(preset.method),
                     ..preset
                 },
-                None => load_config(args.config.as_ref(), method)?,
+                None => load_config(args.config.as_ref(), method, stop)?,
             };
             if let Some(seed) = args.seed {
                 config.seed = seed;

@@ -53,7 +53,7 @@ impl EvalOutcome {
 /// is set, the run ends after the frame under way, reports the frames
 /// evaluated so far and says how far it got.
 pub fn run(args: &EvalArgs, stop: &StopFlag) -> anyhow::Result<EvalOutcome> {
-    let configs = configs(args)?;
+    let configs = configs(args, stop)?;
     let artifacts = Artifacts {
         render_dir: args.render.clone(),
         ply_dir: args.export_ply.clone(),

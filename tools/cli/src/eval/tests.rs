@@ -7,6 +7,8 @@ use slope_ipc_types::{EstimateStatus, SlopeMethod};
 use slope_pipeline::tracking::TrackedSlope;
 use slope_pipeline::{Estimate, Estimator, EstimatorConfig, StageTimings};
 
+use slope_sensor::publish::StopFlag;
+
 use super::run::RenderNames;
 use super::*;
 
@@ -244,9 +246,12 @@ fn preset_paper_literal() {
         seed: 3,
         ..EstimatorConfig::paper_literal()
     };
-    assert_eq!(configs(&args).unwrap(), vec![expected]);
+    assert_eq!(configs(&args, &StopFlag::new()).unwrap(), vec![expected]);
     let args = EvalArgs::try_parse_from(["slope-eval", "rec", "--preset", "default"]).unwrap();
-    assert_eq!(configs(&args).unwrap(), vec![EstimatorConfig::default()]);
+    assert_eq!(
+        configs(&args, &StopFlag::new()).unwrap(),
+        vec![EstimatorConfig::default()]
+    );
     for bad in [
         &["slope-eval", "rec", "--preset", "paper"][..],
         &[

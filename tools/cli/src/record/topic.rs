@@ -26,7 +26,7 @@ pub fn record_topic(
     limits: &RecordLimits,
     stop: &StopFlag,
 ) -> anyhow::Result<RecordStats> {
-    let names = args.common.service_names()?;
+    let names = args.common.service_names(stop)?;
     let node = create_node(&node_name("slope-record"))?;
     let subscriber =
         CloudSubscriber::create_deep(&node, &names).context("cannot subscribe to clouds")?;
