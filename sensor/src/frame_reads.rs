@@ -80,27 +80,10 @@ fn read_images(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::recording::{DepthInfo, MountInfo, RecordingMeta, RecordingWriter, TruthInfo};
+    use crate::recording::{test_meta, RecordingWriter};
 
     fn recording(dir: &std::path::Path) -> (Recording, DepthImage) {
-        let meta = RecordingMeta {
-            sensor: "test".into(),
-            depth: DepthInfo {
-                width: 2,
-                height: 1,
-                unit_m: 0.001,
-                fx: 1.0,
-                fy: 1.0,
-                cx: 0.5,
-                cy: 0.5,
-            },
-            mount: MountInfo {
-                height_m: None,
-                pitch_deg: None,
-                roll_deg: None,
-            },
-            truth: TruthInfo { slope_deg: None },
-        };
+        let meta = test_meta(2, 1);
         let depth = DepthImage {
             width: 2,
             height: 1,

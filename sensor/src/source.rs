@@ -273,28 +273,11 @@ impl FrameSource for RecordingSource {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::recording::{DepthInfo, MountInfo, RecordingMeta, RecordingWriter, TruthInfo};
+    use crate::recording::{test_meta, RecordingWriter};
 
     /// A two-frame recording whose frames.csv is then rewritten with `rows`.
     fn recording_with_rows(dir: &std::path::Path, rows: &str) -> Recording {
-        let meta = RecordingMeta {
-            sensor: "test".into(),
-            depth: DepthInfo {
-                width: 2,
-                height: 2,
-                unit_m: 0.001,
-                fx: 1.0,
-                fy: 1.0,
-                cx: 0.5,
-                cy: 0.5,
-            },
-            mount: MountInfo {
-                height_m: None,
-                pitch_deg: None,
-                roll_deg: None,
-            },
-            truth: TruthInfo { slope_deg: None },
-        };
+        let meta = test_meta(2, 2);
         let mut writer = RecordingWriter::create(dir, &meta, false).expect("create");
         let depth = DepthImage {
             width: 2,

@@ -114,6 +114,30 @@ pub fn metres_to_count(depth_m: f64, unit_m: f64) -> u16 {
     }
 }
 
+/// The metadata of a tiny recording for unit tests: `width` x `height`
+/// pixels of 1 mm counts, focal lengths of 1 px, no mount, no truth.
+#[cfg(test)]
+pub(crate) fn test_meta(width: u32, height: u32) -> RecordingMeta {
+    RecordingMeta {
+        sensor: "test".into(),
+        depth: DepthInfo {
+            width,
+            height,
+            unit_m: 0.001,
+            fx: 1.0,
+            fy: 1.0,
+            cx: 0.5,
+            cy: 0.5,
+        },
+        mount: MountInfo {
+            height_m: None,
+            pitch_deg: None,
+            roll_deg: None,
+        },
+        truth: TruthInfo { slope_deg: None },
+    }
+}
+
 #[cfg(test)]
 mod count_tests {
     use super::metres_to_count;
