@@ -647,7 +647,8 @@ fn every_estimate_reaches_cyclone_dds_in_order_with_the_values_echo_shows() {
 }
 
 /// A subscriber that joins after the estimates were published gets the
-/// last ones at once (transient local, keep last 10).
+/// last ones at once (transient local, keep last 10). The node is named
+/// with `--ros-args -r __ns:= -p frame_id:=`.
 #[test]
 fn a_late_subscriber_gets_the_last_estimates() {
     let Some(python) = venv_python() else {
@@ -658,7 +659,16 @@ fn a_late_subscriber_gets_the_last_estimates() {
     let _estimator = start_estimator(&prefix, &[]);
     let namespace = test_namespace(&prefix);
     let topics = Topics::of(&namespace);
-    let mut node = start_node(&prefix, domain, &["--namespace", &namespace]);
+    // Named in ROS 2's own syntax, as a launch file passes them.
+    let ns_remap = format!("__ns:={namespace}");
+    let ros_args = [
+        "--ros-args",
+        "-r",
+        &ns_remap,
+        "-p",
+        "frame_id:='slope_test_frame'",
+    ];
+    let mut node = start_node(&prefix, domain, &ros_args);
     let mut echo = start_echo(&prefix, 3);
     let mut replay = replay_frames(&prefix, "ramp16", 5.0, 3, 1);
     let echoed = read_json_lines(&mut echo, 3, 60.0);
@@ -680,6 +690,12 @@ fn a_late_subscriber_gets_the_last_estimates() {
         .collect();
     let expected: Vec<Option<u64>> = echoed.iter().map(|e| e["frame"].as_u64()).collect();
     assert_eq!(frames, expected, "{}", node.diagnostics());
+    for line in &received {
+        assert_eq!(
+            line["message"]["header"]["frame_id"], "slope_test_frame",
+            "-p frame_id:="
+        );
+    }
 }
 
 /// `ros2/slope_msgs/msg/*.msg` parse with the `rosbags` message parser and

@@ -23,12 +23,24 @@ const START_EXTENSION: Duration = Duration::from_secs(5);
 /// (`RestartPreventExitStatus=78 2`). `--help` and `--version` print as
 /// usual.
 pub fn parse_daemon_args<T: clap::Parser>() -> T {
-    T::try_parse().unwrap_or_else(|err| {
-        if err.use_stderr() {
-            send(&[NotifyState::Status(&usage_failure(&err.to_string()))]);
-        }
-        err.exit()
-    })
+    T::try_parse().unwrap_or_else(|err| usage_exit(err))
+}
+
+/// [`parse_daemon_args`] of `args` (the program's name first) instead of
+/// the process's.
+pub fn parse_daemon_args_from<T: clap::Parser>(
+    args: impl IntoIterator<Item = std::ffi::OsString>,
+) -> T {
+    T::try_parse_from(args).unwrap_or_else(|err| usage_exit(err))
+}
+
+/// Ends a daemon on `err` as [`parse_daemon_args`] does: a usage error is
+/// also the service manager's status line; exits with clap's status.
+pub fn usage_exit(err: clap::Error) -> ! {
+    if err.use_stderr() {
+        send(&[NotifyState::Status(&usage_failure(&err.to_string()))]);
+    }
+    err.exit()
 }
 
 /// `failed: invalid command line: <clap's first line without "error: ">`.

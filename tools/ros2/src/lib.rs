@@ -11,12 +11,14 @@
 //! - [`surfaces_msg`]: `slope_msgs/msg/Surfaces` of a `Surfaces`;
 //! - [`discovery`]: ROS 2's discovery settings (`ROS_DOMAIN_ID`,
 //!   `ROS_AUTOMATIC_DISCOVERY_RANGE`, `ROS_LOCALHOST_ONLY`) read and checked;
+//! - [`ros_args`]: ROS 2's `--ros-args -p ... -r ...` as our flags;
 //! - `node` (feature `ros2`): the flags, the DDS participant and its
 //!   publishers, the loop from iceoryx2 to DDS.
 
 pub mod diagnostics;
 pub mod discovery;
 pub mod markers;
+pub mod ros_args;
 pub mod surfaces_msg;
 pub mod topics;
 

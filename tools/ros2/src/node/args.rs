@@ -33,6 +33,9 @@ interface. The settings come from the flags, else from the config file's [ros2] 
   slope-ros2 --namespace /robot1 --domain-id 7 # /robot1/slope/estimate on domain 7
   slope-ros2 --base-frame base_link            # and the mount on /tf_static
   ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST slope-ros2
+  slope-ros2 --ros-args -p frame_id:=camera_depth_optical_frame -r __ns:=/robot1
+
+ROS 2's arguments after --ros-args (until --) are read as these flags: the parameters -p frame_id:= and -p base_frame:=, the remappings -r __ns:= and -r __node:=; any other parameter, remapping or ROS option is refused.
 
 On a ROS 2 computer, with slope_msgs built (ros2/slope_msgs): \
 `ros2 topic echo /slope/estimate`; in rviz2, add a MarkerArray display on /slope/markers with \
