@@ -1,14 +1,23 @@
 #!/usr/bin/env bash
-# A manual check, not run by CI (it takes 10-20 minutes): the package under a
-# real systemd. Boots a Debian 12 VM twice with the package and
-# tests/recordings/ramp16 shared in; packaging/vm-check-guest.sh runs at each
-# boot and checks, as systemd sees them: the user and /tmp/iceoryx2, the units'
-# verify, READY=1, the status line, estimates near 16° from slope-replay through
-# the unit to slope-echo outside it, the watchdog restart, the restart on
-# upgrade, stop with status 0 and STOPPING=1, the security score, start at
-# boot once enabled, and apt remove stopping the units.
+# A manual check, not run by CI (it takes 10-20 minutes, more with
+# slope-ros2): the package under a real systemd. Boots a Debian 12 VM twice
+# with the package and tests/recordings/ramp16 shared in;
+# packaging/vm-check-guest.sh runs at each boot and checks, as systemd sees
+# them: the user and /tmp/iceoryx2, the units' verify, READY=1, the status
+# line, estimates near 16° from slope-replay through the unit to slope-echo
+# outside it, the watchdog restart, the restart on upgrade, stop with status 0
+# and STOPPING=1, the security score, start at boot once enabled, and apt
+# remove stopping the units. With the package slope-ros2 as well (the second
+# argument), at the first boot after those: its install (nothing enabled or
+# started), its unit's verify, READY=1 and the status line with
+# ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST, estimates from slope-replay through
+# the estimator unit published by it over DDS with no restart (its sandbox and
+# RustDDS), its journal, stop with status 0, its security score; at the
+# second, its start at boot by slope.target once enabled, and apt remove
+# stopping it.
 #
-#   sudo packaging/vm-check.sh target/debian/slope_0.1.0-1_amd64.deb
+#   sudo packaging/vm-check.sh target/debian/slope_0.1.0-1_amd64.deb \
+#       [target/debian/slope-ros2_0.1.0-1_amd64.deb]
 #
 # Needs root and Debian's qemu-system-x86, debootstrap and e2fsprogs (installed
 # when missing); downloads nothing but Debian packages (the guest's, once, by
@@ -21,11 +30,13 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-if [ $# -ne 1 ] || [ ! -f "$1" ]; then
-    echo "usage: $0 PACKAGE.deb" >&2
+if [ $# -lt 1 ] || [ $# -gt 2 ] || [ ! -f "$1" ] || { [ $# -eq 2 ] && [ ! -f "$2" ]; }; then
+    echo "usage: $0 PACKAGE.deb [SLOPE-ROS2-PACKAGE.deb]" >&2
     exit 2
 fi
 deb=$(realpath "$1")
+ros2_deb=
+[ $# -lt 2 ] || ros2_deb=$(realpath "$2")
 vm=${VM_DIR:-/tmp/slope-vm}
 qemu=${QEMU:-qemu-system-x86_64}
 mirror=${MIRROR:-http://deb.debian.org/debian}
@@ -88,6 +99,7 @@ share="$vm/share"
 rm -rf "$share"
 mkdir -p "$share/out"
 cp "$deb" "$share/"
+[ -z "$ros2_deb" ] || cp "$ros2_deb" "$share/"
 cp -r tests/recordings/ramp16 "$share/ramp16"
 cp systemd/slope-capture.service "$share/"
 install -m 755 packaging/vm-check-guest.sh "$share/guest.sh"
@@ -98,7 +110,7 @@ accel=(-accel kvm -cpu host)
 for boot in 1 2; do
     echo "vm-check: boot $boot ($VM_ACCEL)" >&2
     # shellcheck disable=SC2086 # QEMU_ARGS is a list of arguments
-    timeout 1200 "$qemu" "${accel[@]}" -m 2048 -smp 2 -nographic -vga none -no-reboot \
+    timeout 2400 "$qemu" "${accel[@]}" -m 2048 -smp 2 -nographic -vga none -no-reboot \
         -kernel "$vm/vmlinuz" -initrd "$vm/initrd.img" -append "root=/dev/vda rw console=ttyS0 quiet" \
         -drive "file=$vm/run.img,if=virtio,format=raw" \
         -virtfs "local,path=$share,mount_tag=host,security_model=none,id=host" \
