@@ -222,8 +222,7 @@ impl FrameSource for RecordingSource {
         ) else {
             return Ok(false);
         };
-        let recording = self.recording.clone();
-        let entry = &recording.frames()[self.next];
+        let entry = &self.recording.frames()[self.next];
         let (Some(index), Some(stamp)) = (
             entry.index.checked_add(index_offset),
             entry.timestamp_ns.checked_add(stamp_offset),
@@ -234,12 +233,12 @@ impl FrameSource for RecordingSource {
         let bad = |source: RecordingError| SourceError::BadFrame {
             index: entry.index,
             row: entry.row,
-            file: recording.dir().join("frames.csv"),
+            file: self.recording.dir().join("frames.csv"),
             source,
         };
         let stop = self.stop.as_ref();
         let Some(images) =
-            read_frame_images(&recording, entry, &mut frame.depth, Colour::Read, stop)?
+            read_frame_images(&self.recording, entry, &mut frame.depth, Colour::Read, stop)?
         else {
             return Ok(false);
         };
