@@ -1,4 +1,4 @@
-//! Reading a config file ([`SlopeFile::load`], [`SlopeFile::from_toml_str`])
+//! Reading a config file ([`SlopeFile::load_or_stop`], [`SlopeFile::from_toml_str`])
 //! and writing one ([`SlopeFile::to_toml`]): TOML errors and unknown keys
 //! named with their full path and line, a file of the old layout refused
 //! with how to fix it.
@@ -49,22 +49,10 @@ impl SlopeFile {
 
     /// Reads `path`, or the defaults when `path` is `None`. Only a regular
     /// file of UTF-8 text, at most [`MAX_SETTINGS_BYTES`] long, is read (a
-    /// FIFO would block, `/dev/zero` never end).
-    pub fn load(path: Option<&Path>) -> Result<Self, ConfigFileError> {
-        let Some(path) = path else {
-            return Ok(Self::default());
-        };
-        let text = read_text(path, MAX_SETTINGS_BYTES).map_err(|source| ConfigFileError::Read {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        Self::parse_file(path, &text)
-    }
-
-    /// [`Self::load`] for a daemon that has its stop request: the file is
-    /// read on a thread of its own, so a stop request ends the wait for a
-    /// read that blocks in the kernel (a config file on a stalled network
-    /// mount) within 50 ms (`READ_SLICE`). `Ok(None)` when `stop` came first.
+    /// FIFO would block, `/dev/zero` never end). The file is read on a
+    /// thread of its own, so a stop request ends the wait for a read that
+    /// blocks in the kernel (a config file on a stalled network mount)
+    /// within 50 ms (`READ_SLICE`). `Ok(None)` when `stop` came first.
     pub fn load_or_stop(
         path: Option<&Path>,
         stop: &StopFlag,

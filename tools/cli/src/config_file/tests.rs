@@ -242,11 +242,14 @@ fn a_missing_default_file_means_the_defaults() {
     assert_eq!(config_path(None, &default), None);
     std::fs::write(&default, "[estimator]\nseed = 7\n").expect("write");
     assert_eq!(config_path(None, &default), Some(default.clone()));
-    let file = SlopeFile::load(Some(&default)).expect("valid");
+    let load = |path: &std::path::Path| {
+        SlopeFile::load_or_stop(Some(path), &slope_sensor::publish::StopFlag::new())
+    };
+    let file = load(&default).expect("valid").expect("not stopped");
     assert_eq!(file.estimator.seed, 7);
     let given = dir.path().join("other.toml");
     assert_eq!(config_path(Some(&given), &default), Some(given.clone()));
-    let err = SlopeFile::load(Some(&given)).expect_err("no such file");
+    let err = load(&given).expect_err("no such file");
     assert!(err.to_string().contains("other.toml"), "{err}");
 }
 
