@@ -2,6 +2,8 @@
 //! each test its own service prefix, spawn children that die with the test,
 //! and wait on deadlines instead of sleeping.
 
+pub mod python_venv;
+
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};

@@ -13,6 +13,7 @@ use std::time::Duration;
 use nix::sys::signal::Signal;
 
 use serde_json::Value;
+use slope_integration_tests::python_venv::{make_venv, python, python_optional, venv_or_skip};
 use slope_integration_tests::{deadline, replay_frames, repo_root, unique_prefix, Proc};
 use slope_ipc_types::layout::{self, FieldLayout};
 use slope_ipc_types::{
@@ -21,15 +22,17 @@ use slope_ipc_types::{
 };
 use slope_sensor::ipc::ESTIMATE_MAX_SUBSCRIBERS;
 
-const REQUIRE_PYTHON_ENV: &str = "SLOPE_REQUIRE_PYTHON";
-
-fn python() -> String {
-    std::env::var("PYTHON").unwrap_or_else(|_| "python3".to_string())
-}
-
-/// True when a test may skip for want of Python (not under CI).
-fn python_optional() -> bool {
-    std::env::var_os(REQUIRE_PYTHON_ENV).is_none() && std::env::var_os("CI").is_none()
+/// A venv with the client installed (and with it `iceoryx2` from PyPI),
+/// made once for all the tests of this file (they run in parallel: two
+/// `python3 -m venv` into one directory at once fail), or `None` (the test
+/// skips) when it cannot be made and Python is not required.
+fn client_python() -> Option<PathBuf> {
+    static VENV: std::sync::OnceLock<Result<PathBuf, String>> = std::sync::OnceLock::new();
+    let made = VENV.get_or_init(|| {
+        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("python-client-venv");
+        make_venv(&dir, None, &[repo_root().join("python").as_os_str()])
+    });
+    venv_or_skip(made, "the Python client")
 }
 
 /// Whether the interpreter runs at all; without it the tests say so and
@@ -175,63 +178,6 @@ fn python_structures_match_the_rust_messages() {
             MAX_SURFACES
         ])
     );
-}
-
-/// A venv with the client installed (and with it `iceoryx2` from PyPI),
-/// or why there is none.
-fn venv_with_client() -> Result<PathBuf, String> {
-    let venv = Path::new(env!("CARGO_TARGET_TMPDIR")).join("python-client-venv");
-    let bin = venv.join("bin/python");
-    if !bin.exists() {
-        let made = Command::new(python())
-            .args(["-m", "venv"])
-            .arg(&venv)
-            .output()
-            .map_err(|e| format!("cannot run {}: {e}", python()))?;
-        if !made.status.success() {
-            return Err(format!(
-                "python3 -m venv failed: {}",
-                String::from_utf8_lossy(&made.stderr)
-            ));
-        }
-    }
-    let installed = Command::new(&bin)
-        .args([
-            "-m",
-            "pip",
-            "install",
-            "--quiet",
-            "--disable-pip-version-check",
-        ])
-        .arg(repo_root().join("python"))
-        .output()
-        .map_err(|e| format!("cannot run pip: {e}"))?;
-    if !installed.status.success() {
-        return Err(format!(
-            "pip install python/ failed: {}",
-            String::from_utf8_lossy(&installed.stderr)
-        ));
-    }
-    Ok(bin)
-}
-
-/// The venv's interpreter, or `None` (the test skips) when the client
-/// cannot be installed and Python is not required. The venv is made and
-/// the client installed once for all the tests of this file, which run in
-/// parallel: two `python3 -m venv` into one directory at once fail.
-fn client_python() -> Option<PathBuf> {
-    static VENV: std::sync::OnceLock<Result<PathBuf, String>> = std::sync::OnceLock::new();
-    match VENV.get_or_init(venv_with_client).clone() {
-        Ok(bin) => Some(bin),
-        Err(why) => {
-            assert!(
-                python_optional(),
-                "the Python client cannot be installed: {why}"
-            );
-            eprintln!("SKIPPED: the Python client cannot be installed here ({why})");
-            None
-        }
-    }
 }
 
 #[test]

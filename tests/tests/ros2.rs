@@ -19,6 +19,7 @@ use std::sync::atomic::{AtomicU16, Ordering};
 use std::time::{Duration, Instant};
 
 use serde_json::Value;
+use slope_integration_tests::python_venv::{make_venv, venv_or_skip};
 use slope_integration_tests::{
     deadline, read_json_lines, replay_frames, repo_root, start_echo, start_estimator,
     unique_prefix, Proc,
@@ -27,75 +28,20 @@ use slope_ipc_types::{
     confidence, surface_flags, EstimateStatus, SlopeMethod, SurfaceRole, SurfaceSupport, NO_SURFACE,
 };
 
-const REQUIRE_PYTHON_ENV: &str = "SLOPE_REQUIRE_PYTHON";
 /// Frames replayed in a test.
 const FRAMES: u64 = 8;
 
-fn python() -> String {
-    std::env::var("PYTHON").unwrap_or_else(|_| "python3".to_string())
-}
-
-fn python_optional() -> bool {
-    std::env::var_os(REQUIRE_PYTHON_ENV).is_none() && std::env::var_os("CI").is_none()
-}
-
-/// A venv with `cyclonedds` and `rosbags`, or why there is none.
-fn make_venv() -> Result<PathBuf, String> {
-    let venv = Path::new(env!("CARGO_TARGET_TMPDIR")).join("ros2-venv");
-    let bin = venv.join("bin/python");
-    if !bin.exists() {
-        let made = Command::new(python())
-            .args(["-m", "venv"])
-            .arg(&venv)
-            .output()
-            .map_err(|e| format!("cannot run {}: {e}", python()))?;
-        if !made.status.success() {
-            return Err(format!(
-                "python3 -m venv failed: {}",
-                String::from_utf8_lossy(&made.stderr)
-            ));
-        }
-    }
-    let present = Command::new(&bin)
-        .args(["-c", "import cyclonedds, rosbags"])
-        .output()
-        .is_ok_and(|out| out.status.success());
-    if present {
-        return Ok(bin);
-    }
-    let installed = Command::new(&bin)
-        .args([
-            "-m",
-            "pip",
-            "install",
-            "--quiet",
-            "--disable-pip-version-check",
-            "cyclonedds",
-            "rosbags",
-        ])
-        .output()
-        .map_err(|e| format!("cannot run pip: {e}"))?;
-    if !installed.status.success() {
-        return Err(format!(
-            "pip install cyclonedds rosbags failed: {}",
-            String::from_utf8_lossy(&installed.stderr)
-        ));
-    }
-    Ok(bin)
-}
-
-/// The venv's interpreter, made once for all the tests of this file, or
-/// `None` (the test skips) when it cannot be made and Python is optional.
+/// A venv with `cyclonedds` and `rosbags`, made once for all the tests of
+/// this file, or `None` (the test skips) when it cannot be made and Python
+/// is optional.
 fn venv_python() -> Option<PathBuf> {
     static VENV: std::sync::OnceLock<Result<PathBuf, String>> = std::sync::OnceLock::new();
-    match VENV.get_or_init(make_venv).clone() {
-        Ok(bin) => Some(bin),
-        Err(why) => {
-            assert!(python_optional(), "the Python venv cannot be made: {why}");
-            eprintln!("SKIPPED: the Python venv cannot be made here ({why})");
-            None
-        }
-    }
+    let made = VENV.get_or_init(|| {
+        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("ros2-venv");
+        let packages = ["cyclonedds", "rosbags"].map(OsStr::new);
+        make_venv(&dir, Some("cyclonedds, rosbags"), &packages)
+    });
+    venv_or_skip(made, "the Python venv (cyclonedds, rosbags)")
 }
 
 /// A DDS domain no other test of this run uses (the process id spreads

@@ -16,87 +16,34 @@
 //! Without Python or PyPI the tests say why and skip, unless
 //! `SLOPE_REQUIRE_PYTHON` (or `CI`) is set: then they fail.
 
+use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::Duration;
 
 use serde_json::{json, Value};
+use slope_integration_tests::python_venv::{make_venv, venv_or_skip};
 use slope_integration_tests::{binary, recording, replay_frames, repo_root, unique_prefix, Proc};
 use slope_ipc_types::layout;
 use slope_sensor::recording::Recording;
 
-const REQUIRE_PYTHON_ENV: &str = "SLOPE_REQUIRE_PYTHON";
 /// Frames of ramp16 in each bag: enough for the tracker to matter.
 const FRAMES: usize = 8;
 /// Added to the recording's stamps (which start at 0): a bag's stamps are
 /// since the Unix epoch.
 const EPOCH_NS: u64 = 1_700_000_000_000_000_000;
 
-fn python() -> String {
-    std::env::var("PYTHON").unwrap_or_else(|_| "python3".to_string())
-}
-
-fn python_optional() -> bool {
-    std::env::var_os(REQUIRE_PYTHON_ENV).is_none() && std::env::var_os("CI").is_none()
-}
-
-/// A venv with `rosbags` (and numpy, its dependency), or why there is none.
-fn venv_with_rosbags() -> Result<PathBuf, String> {
-    let venv = Path::new(env!("CARGO_TARGET_TMPDIR")).join("rosbags-venv");
-    let bin = venv.join("bin/python");
-    if !bin.exists() {
-        let made = Command::new(python())
-            .args(["-m", "venv"])
-            .arg(&venv)
-            .output()
-            .map_err(|e| format!("cannot run {}: {e}", python()))?;
-        if !made.status.success() {
-            return Err(format!(
-                "python3 -m venv failed: {}",
-                String::from_utf8_lossy(&made.stderr)
-            ));
-        }
-    }
-    let present = Command::new(&bin)
-        .args(["-c", "import rosbags"])
-        .output()
-        .is_ok_and(|out| out.status.success());
-    if present {
-        return Ok(bin);
-    }
-    let installed = Command::new(&bin)
-        .args([
-            "-m",
-            "pip",
-            "install",
-            "--quiet",
-            "--disable-pip-version-check",
-            "rosbags",
-        ])
-        .output()
-        .map_err(|e| format!("cannot run pip: {e}"))?;
-    if !installed.status.success() {
-        return Err(format!(
-            "pip install rosbags failed: {}",
-            String::from_utf8_lossy(&installed.stderr)
-        ));
-    }
-    Ok(bin)
-}
-
-/// The venv's interpreter, made once for all the tests of this file (they
-/// run in parallel: two `python3 -m venv` into one directory fail), or
-/// `None` (the test skips) when it cannot be made and Python is optional.
+/// A venv with `rosbags` (and numpy, its dependency), made once for all the
+/// tests of this file (they run in parallel: two `python3 -m venv` into one
+/// directory fail), or `None` (the test skips) when it cannot be made and
+/// Python is optional.
 fn rosbags_python() -> Option<PathBuf> {
     static VENV: std::sync::OnceLock<Result<PathBuf, String>> = std::sync::OnceLock::new();
-    match VENV.get_or_init(venv_with_rosbags).clone() {
-        Ok(bin) => Some(bin),
-        Err(why) => {
-            assert!(python_optional(), "rosbags cannot be installed: {why}");
-            eprintln!("SKIPPED: rosbags cannot be installed here ({why})");
-            None
-        }
-    }
+    let made = VENV.get_or_init(|| {
+        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("rosbags-venv");
+        make_venv(&dir, Some("rosbags"), &[OsStr::new("rosbags")])
+    });
+    venv_or_skip(made, "rosbags")
 }
 
 /// Runs `tests/python/ros_bags.py` with `args`; its stdout.
