@@ -328,25 +328,26 @@ impl MessageType {
     }
 }
 
+/// The field lines of a `.msg` text as `(type, name)`: comments, constants
+/// and blank lines left out (the tests hold our `.msg` files to the
+/// messages they describe).
+pub fn msg_fields(text: &str) -> Vec<(String, String)> {
+    text.lines()
+        .map(|line| line.split('#').next().unwrap_or("").trim())
+        .filter(|line| !line.is_empty() && !line.contains('='))
+        .map(|line| {
+            let mut words = line.split_whitespace();
+            let ty = words.next().unwrap_or("").to_string();
+            let name = words.next().unwrap_or("").to_string();
+            (ty, name)
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use slope_ipc_types::layout;
-
-    /// The field lines of a `.msg` text: `(type, name)`, comments,
-    /// constants and blank lines left out.
-    fn fields(text: &str) -> Vec<(String, String)> {
-        text.lines()
-            .map(|line| line.split('#').next().unwrap_or("").trim())
-            .filter(|line| !line.is_empty() && !line.contains('='))
-            .map(|line| {
-                let mut words = line.split_whitespace();
-                let ty = words.next().unwrap_or("").to_string();
-                let name = words.next().unwrap_or("").to_string();
-                (ty, name)
-            })
-            .collect()
-    }
 
     /// The size of one value of a `.msg` type (`float64[4]`: 32).
     fn size_of_type(ty: &str) -> usize {
@@ -364,7 +365,7 @@ mod tests {
 
     #[test]
     fn the_msg_file_has_every_field_of_the_estimate_in_order() {
-        let msg = fields(SLOPE_ESTIMATE_MSG);
+        let msg = msg_fields(SLOPE_ESTIMATE_MSG);
         assert_eq!(msg[0], ("std_msgs/Header".into(), "header".into()));
         let rust = layout::slope_estimate();
         let names: Vec<&str> = msg[1..].iter().map(|(_, n)| n.as_str()).collect();

@@ -120,22 +120,9 @@ impl SurfacesMsg {
 mod tests {
     use slope_ipc_types::layout;
     use slope_ipc_types::{surface_flags, SurfaceRole, SurfaceSupport, NO_SURFACE};
-    use slope_tools::ros2_messages::{from_cdr, to_cdr};
+    use slope_tools::ros2_messages::{from_cdr, msg_fields, to_cdr};
 
     use super::*;
-
-    /// `(type, name)` of every field line of a `.msg` text.
-    fn fields(text: &str) -> Vec<(String, String)> {
-        text.lines()
-            .map(|line| line.split('#').next().unwrap_or("").trim())
-            .filter(|line| !line.is_empty() && !line.contains('='))
-            .map(|line| {
-                let mut words = line.split_whitespace();
-                let ty = words.next().unwrap_or("").to_string();
-                (ty, words.next().unwrap_or("").to_string())
-            })
-            .collect()
-    }
 
     /// `NAME=value` of every constant.
     fn constants(text: &str) -> Vec<(String, u32)> {
@@ -151,13 +138,16 @@ mod tests {
 
     #[test]
     fn the_msg_files_have_every_field_of_the_ipc_messages_in_order() {
-        let surface: Vec<String> = fields(SURFACE_MSG).into_iter().map(|(_, n)| n).collect();
+        let surface: Vec<String> = msg_fields(SURFACE_MSG)
+            .into_iter()
+            .map(|(_, n)| n)
+            .collect();
         let ipc: Vec<&str> = layout::surface_description()
             .iter()
             .map(|f| f.name)
             .collect();
         assert_eq!(surface, ipc);
-        let surfaces = fields(SURFACES_MSG);
+        let surfaces = msg_fields(SURFACES_MSG);
         assert_eq!(surfaces[0], ("std_msgs/Header".into(), "header".into()));
         assert_eq!(
             surfaces.last().unwrap(),
