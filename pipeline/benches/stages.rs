@@ -50,6 +50,14 @@ fn bench_statistical_outlier(
     c.bench_function("statistical_outlier/full_frame", |b| {
         b.iter(|| black_box(sor.filter(view, &config.outlier, &mut keep)))
     });
+    // The statistic in bands of rows on two threads (`threads = 2`).
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .expect("two threads");
+    c.bench_function("statistical_outlier/full_frame_2_threads", |b| {
+        b.iter(|| black_box(sor.filter_on(view, &config.outlier, &mut keep, Some(&pool))))
+    });
     sor.filter(view, &config.outlier, &mut keep);
     keep
 }

@@ -158,6 +158,7 @@ impl Estimator {
                 }
             }
         }
+        self.segmenter.set_workers(self.pool.clone());
         self
     }
 
@@ -406,10 +407,12 @@ impl Estimator {
     fn remove_outliers(&mut self, cloud: &CloudView<'_>) -> Result<(), EstimateStatus> {
         let kept = if self.config.outlier.enabled {
             match self.config.outlier.neighbourhood {
-                OutlierNeighbourhood::Grid => {
-                    self.outlier
-                        .filter(cloud, &self.config.outlier, &mut self.keep)
-                }
+                OutlierNeighbourhood::Grid => self.outlier.filter_on(
+                    cloud,
+                    &self.config.outlier,
+                    &mut self.keep,
+                    self.pool.as_deref(),
+                ),
                 OutlierNeighbourhood::KdTree => {
                     self.knn_outlier
                         .filter(cloud, &self.config.outlier, &mut self.keep)

@@ -167,6 +167,15 @@ impl MomentSums {
         s[8] += z * z;
     }
 
+    /// Adds the points of `other`, summed about the same origin.
+    pub fn merge(&mut self, other: &MomentSums) {
+        debug_assert_eq!(self.origin, other.origin);
+        self.count += other.count;
+        for (s, o) in self.sums.iter_mut().zip(&other.sums) {
+            *s += o;
+        }
+    }
+
     /// The same moments as [`Moments`] (which fits take).
     pub fn moments(&self) -> Moments {
         let s = &self.sums;

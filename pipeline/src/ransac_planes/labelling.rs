@@ -1,6 +1,8 @@
 //! Labelling: the taken sample cells relaxed to the nearer plane along
 //! junctions, then every kept pixel given to the nearest plane (within the
-//! threshold) among those that took the sample cells around it.
+//! threshold) among those that took the sample cells around it, in fixed
+//! bands of rows (on the estimator's worker threads when it has them),
+//! joined in band order.
 
 use nalgebra::Vector3;
 use slope_ipc_types::CloudPoint;
@@ -125,24 +127,103 @@ impl PlaneSegmenter {
 
     /// The labelling pass proper: each kept, measured pixel to the nearest
     /// of its cell's candidate planes within the threshold, pushed onto
-    /// that plane's inliers and added to its sums.
+    /// that plane's inliers and added to its sums. The rows are labelled in
+    /// bands of [`LABEL_BAND_ROWS`] (on the workers' threads, when there
+    /// are workers), each with its own inlier lists and sums, then joined
+    /// in band order: the same inliers, in pixel order, and the same sums,
+    /// bit for bit, whatever the thread count.
     fn label_rows(&mut self, cloud: &CloudView<'_>, keep: &[bool], found: &[Plane], t: Threshold) {
-        let (w, h) = (cloud.width, cloud.height);
-        let (s, half) = (self.sample.stride, self.sample.stride / 2);
-        let (cw, ch) = (self.sample.coarse_w, self.sample.coarse_h);
+        let bands = cloud.height.div_ceil(LABEL_BAND_ROWS);
+        if self.bands.len() < bands {
+            self.bands.resize_with(bands, LabelBand::default);
+        }
+        for band in &mut self.bands[..bands] {
+            band.reset(&self.sums);
+        }
+        let grid = RunGrid {
+            cloud,
+            keep,
+            found,
+            t,
+            candidates: &self.cell_candidates,
+            stride: self.sample.stride,
+            coarse: (self.sample.coarse_w, self.sample.coarse_h),
+        };
+        let jobs = self.bands[..bands].iter_mut().enumerate();
+        match self.workers.as_deref() {
+            Some(pool) if bands > 1 => pool.scope(|scope| {
+                for (b, band) in jobs {
+                    scope.spawn(move |_| grid.label_band(b, band));
+                }
+            }),
+            _ => jobs.for_each(|(b, band)| grid.label_band(b, band)),
+        }
+        for (k, (plane, sums)) in self.planes.iter_mut().zip(&mut self.sums).enumerate() {
+            for band in &self.bands[..bands] {
+                plane.inliers.extend_from_slice(&band.inliers[k]);
+                sums.merge(&band.sums[k]);
+            }
+        }
+    }
+}
+
+/// Image rows per band of the labelling pass: fixed, so that the sums are
+/// added in the same order whatever the thread count (14 bands on a
+/// Kinect v2 frame).
+pub(super) const LABEL_BAND_ROWS: usize = 32;
+
+/// One band's inliers and sums, per plane.
+#[derive(Debug, Default, Clone)]
+pub(super) struct LabelBand {
+    inliers: Vec<Vec<u32>>,
+    sums: Vec<MomentSums>,
+}
+
+impl LabelBand {
+    /// Empty, one list and one sum per plane of `empty` (the planes' empty
+    /// sums about their origins), reusing the last frame's lists.
+    fn reset(&mut self, empty: &[MomentSums]) {
+        self.inliers.truncate(empty.len());
+        self.inliers.iter_mut().for_each(Vec::clear);
+        self.inliers.resize_with(empty.len(), Vec::new);
+        self.sums.clear();
+        self.sums.extend_from_slice(empty);
+    }
+}
+
+/// What the labelling of a band reads: the pixels, the planes, and the
+/// sample cells' candidate planes.
+#[derive(Clone, Copy)]
+struct RunGrid<'a> {
+    cloud: &'a CloudView<'a>,
+    keep: &'a [bool],
+    found: &'a [Plane],
+    t: Threshold,
+    candidates: &'a [([u16; 9], u8)],
+    stride: usize,
+    /// Sample cells across and down.
+    coarse: (usize, usize),
+}
+
+impl RunGrid<'_> {
+    /// Labels the rows of band `b` into `band`.
+    fn label_band(&self, b: usize, band: &mut LabelBand) {
+        let (w, h) = (self.cloud.width, self.cloud.height);
+        let (s, half) = (self.stride, self.stride / 2);
+        let (cw, ch) = self.coarse;
         // Each row is walked a sample cell's columns at a time: pixels
         // of one run share their candidate planes (none: skipped whole).
         let run_start = |c: usize| if c == 0 { 0 } else { c * s + half };
         let mut labeller = RunLabeller {
-            planes: &mut self.planes,
-            sums: &mut self.sums,
-            found,
-            t,
+            inliers: &mut band.inliers,
+            sums: &mut band.sums,
+            found: self.found,
+            t: self.t,
         };
-        for v in 0..h {
+        for v in b * LABEL_BAND_ROWS..((b + 1) * LABEL_BAND_ROWS).min(h) {
             let row = (v.saturating_sub(half) / s).min(ch - 1) * cw;
             for column in 0..cw {
-                let (candidates, n) = &self.cell_candidates[row + column];
+                let (candidates, n) = &self.candidates[row + column];
                 if *n == 0 {
                     continue;
                 }
@@ -153,7 +234,7 @@ impl PlaneSegmenter {
                 };
                 let first = v * w + run_start(column);
                 let run = first..v * w + end.min(w);
-                let (keep, points) = (&keep[run.clone()], &cloud.points[run]);
+                let (keep, points) = (&self.keep[run.clone()], &self.cloud.points[run]);
                 match &candidates[..*n as usize] {
                     &[k] => labeller.one(k as usize, first, keep, points),
                     several => labeller.nearest(several, first, keep, points),
@@ -166,7 +247,7 @@ impl PlaneSegmenter {
 /// The labelling of one run of pixels (a row's pixels within one sample
 /// cell's columns) given the run's candidate planes.
 struct RunLabeller<'a> {
-    planes: &'a mut [SegmentedPlane],
+    inliers: &'a mut [Vec<u32>],
     sums: &'a mut [MomentSums],
     found: &'a [Plane],
     t: Threshold,
@@ -177,7 +258,7 @@ impl RunLabeller<'_> {
     /// run, the same additions in the same order as [`Self::nearest`].
     #[inline]
     fn one(&mut self, k: usize, first: usize, keep: &[bool], points: &[CloudPoint]) {
-        let (plane, inliers) = (&self.found[k], &mut self.planes[k].inliers);
+        let (plane, inliers) = (&self.found[k], &mut self.inliers[k]);
         let mut sums = self.sums[k];
         for (i, (&kept, point)) in (first..).zip(keep.iter().zip(points)) {
             if !kept || !is_measured(point) {
@@ -208,7 +289,7 @@ impl RunLabeller<'_> {
                 }
             }
             if let Some((_, k)) = best {
-                self.planes[k as usize].inliers.push(i as u32);
+                self.inliers[k as usize].push(i as u32);
                 self.sums[k as usize].add(p.x, p.y, p.z);
             }
         }

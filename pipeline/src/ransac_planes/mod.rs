@@ -63,6 +63,8 @@
 //! optimisation), `regions.rs` (the largest connected region),
 //! `labelling.rs` (cell relaxation and the full-resolution labelling).
 
+use std::sync::Arc;
+
 use nalgebra::Vector3;
 use rand_chacha::ChaCha8Rng;
 
@@ -160,6 +162,11 @@ pub struct PlaneSegmenter {
     planes: Vec<SegmentedPlane>,
     sums: Vec<MomentSums>,
     moments: Vec<Moments>,
+    /// The labelling pass's bands of rows.
+    bands: Vec<labelling::LabelBand>,
+    /// With `threads` > 1: the estimator's worker threads, which label the
+    /// bands at once.
+    workers: Option<Arc<rayon::ThreadPool>>,
 }
 
 /// The label of a sample cell no plane took.
@@ -172,6 +179,12 @@ pub const MAX_PLANES: usize = NO_PLANE as usize;
 impl PlaneSegmenter {
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// Threads the labelling pass may use (`None`: the caller's alone);
+    /// the planes are the same, bit for bit, either way.
+    pub fn set_workers(&mut self, workers: Option<Arc<rayon::ThreadPool>>) {
+        self.workers = workers;
     }
 
     /// The planes of the last [`Self::segment`] call, in the order they

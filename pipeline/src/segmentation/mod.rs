@@ -44,6 +44,12 @@ impl Segmentation {
         Self::default()
     }
 
+    /// Threads the shared labelling pass may use (`None`: the caller's
+    /// alone); the planes are the same, bit for bit, either way.
+    pub fn set_workers(&mut self, workers: Option<std::sync::Arc<rayon::ThreadPool>>) {
+        self.segmenter.set_workers(workers);
+    }
+
     /// The planes of the last [`Self::segment`] call, largest first (up to
     /// the final relabelling).
     pub fn planes(&self) -> &[SegmentedPlane] {

@@ -64,127 +64,180 @@ const fn disc_row_run(start: usize, len: usize, du: isize, dv: isize) -> bool {
     true
 }
 
+/// The scratch of one band of rows: the pair distances of its last three
+/// rows, one row per half-disc offset and row slot, and a row's sums.
+#[derive(Debug, Default, Clone)]
+pub(super) struct DiscScratch {
+    pairs: Vec<f32>,
+    row_sum: Vec<f32>,
+}
+
+/// The NaN-padded coordinate planes and their layout, shared by the bands.
+#[derive(Clone, Copy)]
+struct Padded<'a> {
+    planes: [&'a [f32]; 3],
+    w: usize,
+    pad: usize,
+}
+
 impl StatisticalOutlierFilter {
     /// The m = 20 fast path: each pixel's 20 grid-nearest neighbours, every
-    /// pair's distance computed once. Rows are processed top to bottom; the
-    /// distances from row `R` to rows `R`, `R+1` and `R+2` are kept for three
-    /// rows, so row `R`'s sums gather its 20 distances from the rows `R-2..=R`
-    /// without scattering into other rows. A NaN in the sum means a missing
-    /// neighbour (NaN coordinates propagate), and such pixels take the
-    /// fallback.
+    /// pair's distance computed once. With a pool the image is cut into
+    /// bands of rows, two per thread, each computed as the whole image is
+    /// (a band's first two pair rows are its upper neighbour's last, done
+    /// again): every statistic is the same bits whatever the thread count.
     ///
     /// With `present` a pixel that has at least [`MIN_PRESENT`] of its 20
     /// grid neighbours takes the mean distance to those it has instead (the
     /// finite pair distances, summed in the same order); only the others
     /// search the 9x9 window.
-    pub(super) fn grid_disc_statistic(&mut self, w: usize, h: usize, pad: usize, present: bool) {
-        const M: usize = 20;
+    pub(super) fn grid_disc_statistic(
+        &mut self,
+        (w, h, pad): (usize, usize, usize),
+        present: bool,
+        pool: Option<&rayon::ThreadPool>,
+    ) {
         // The pair rows span the columns -2..w+2 of the rows -2..h; `pad`
         // (4 for m = 20) keeps every access inside the padded planes.
         debug_assert!(pad >= 4);
-        let pw = w + 2 * pad;
-        let ew = w + 4;
-        self.pairs.clear();
-        self.pairs.resize(HALF_DISC.len() * 3 * ew, f32::NAN);
-        self.row_sum.clear();
-        self.row_sum.resize(w, 0.0);
-        for row in pad - 2..pad + h {
-            let slot = row % 3;
-            let first = row * pw + pad - 2;
-            let planes = [&self.xs[..], &self.ys[..], &self.zs[..]];
-            let out = &mut self.pairs[slot * HALF_DISC.len() * ew..][..HALF_DISC.len() * ew];
-            // The offsets one image row apart at a time (HALF_DISC is in
-            // that order): the centre row is loaded once per group, and the
-            // other row once per plane. The group sizes (2, 5, 3) and the
-            // other rows' bases (`dv * pw + du` of a group's first offset:
-            // 1, pw - 2, 2 * pw - 1) are HALF_DISC's, checked here:
-            const {
-                assert!(
-                    disc_row_run(0, 2, 1, 0)
-                        && disc_row_run(2, 5, -2, 1)
-                        && disc_row_run(7, 3, -1, 2)
-                        && HALF_DISC.len() == 2 + 5 + 3
-                )
-            };
-            let (same_row, out) = out.split_at_mut(2 * ew);
-            let (next_row, two_rows) = out.split_at_mut(5 * ew);
-            pair_distances::<2>(planes, first, first + 1, same_row);
-            pair_distances::<5>(planes, first, first + pw - 2, next_row);
-            pair_distances::<3>(planes, first, first + 2 * pw - 1, two_rows);
-            if row < pad {
-                continue;
-            }
-            self.disc_row_sums(row, ew);
-            let v = row - pad;
-            let centre = row * pw + pad;
-            // The sum is NaN where the centre or a neighbour has no reading;
-            // blocks with a measured centre among those take the mean of the
-            // neighbours present (with `present`, at least MIN_PRESENT) or
-            // the exact window search.
-            const BLOCK: usize = 32;
-            let stats = &mut self.mean_distance[v * w..(v + 1) * w];
-            let measured = &self.zs[centre..centre + w];
-            let blocks = stats
-                .chunks_mut(BLOCK)
-                .zip(self.row_sum[..w].chunks(BLOCK).zip(measured.chunks(BLOCK)));
-            let mut starts = None;
-            for (b, (stats, (sums, zs))) in blocks.enumerate() {
-                let mut missing = false;
-                for ((stat, &s), &z) in stats.iter_mut().zip(sums).zip(zs) {
-                    *stat = s / M as f32;
-                    missing |= s.is_nan() & z.is_finite();
+        let padded = Padded {
+            planes: [&self.xs[..], &self.ys[..], &self.zs[..]],
+            w,
+            pad,
+        };
+        let stats = &mut self.mean_distance[..w * h];
+        let bands = pool.map_or(1, |p| (2 * p.current_num_threads()).min(h));
+        if self.disc_scratch.len() < bands {
+            self.disc_scratch.resize_with(bands, DiscScratch::default);
+        }
+        let rows = h.div_ceil(bands);
+        let jobs = stats
+            .chunks_mut(rows * w)
+            .zip(&mut self.disc_scratch)
+            .enumerate();
+        match pool {
+            Some(pool) if bands > 1 => pool.scope(|scope| {
+                for (b, (stats, scratch)) in jobs {
+                    scope.spawn(move |_| disc_band(padded, b * rows, stats, present, scratch));
                 }
-                if !missing {
-                    continue;
-                }
-                let starts = starts.get_or_insert_with(|| disc_starts(row, ew));
-                for (u, (stat, z)) in stats.iter_mut().zip(zs).enumerate() {
-                    if stat.is_nan() && z.is_finite() {
-                        let u = b * BLOCK + u;
-                        let near = present
-                            .then(|| present_mean(&self.pairs, starts, u))
-                            .flatten();
-                        *stat = near.unwrap_or_else(|| {
-                            fallback_disc([&self.xs, &self.ys, &self.zs], centre + u, pw)
-                        });
-                    }
+            }),
+            _ => {
+                for (b, (stats, scratch)) in jobs {
+                    disc_band(padded, b * rows, stats, present, scratch);
                 }
             }
         }
     }
+}
 
-    /// Sums the 20 pair distances of every pixel of padded row `row` into
-    /// `row_sum`, in a fixed order that sets the f32 rounding of the
-    /// statistic (pinned bit for bit by the test
-    /// `a_complete_disc_sums_its_distances_in_f32_in_a_fixed_order`): the
-    /// pairs from two rows up, from one row up, then the row's own.
-    fn disc_row_sums(&mut self, row: usize, ew: usize) {
-        let w = ew - 4;
-        // Pixel u sits at column e = u + 2 of a pair row; the pair (k) seen
-        // from its other end is at column e - du_k of row row - dv_k.
-        let term = |k: usize, dv: usize, shift: isize| -> &[f32] {
-            let base = ((row - dv) % 3 * HALF_DISC.len() + k) * ew;
-            let start = (2 - shift) as usize;
-            &self.pairs[base + start..base + start + w]
+/// The statistics of the image rows `v0..` that `stats` holds (whole
+/// rows). Rows are processed top to bottom; the distances from row `R` to
+/// rows `R`, `R+1` and `R+2` are kept for three rows, so row `R`'s sums
+/// gather its 20 distances from the rows `R-2..=R` without scattering into
+/// other rows. A NaN in the sum means a missing neighbour (NaN coordinates
+/// propagate), and such pixels take the fallback.
+fn disc_band(padded: Padded<'_>, v0: usize, stats: &mut [f32], present: bool, s: &mut DiscScratch) {
+    const M: usize = 20;
+    let Padded { planes, w, pad } = padded;
+    let [xs, ys, zs] = planes;
+    let pw = w + 2 * pad;
+    let ew = w + 4;
+    s.pairs.clear();
+    s.pairs.resize(HALF_DISC.len() * 3 * ew, f32::NAN);
+    s.row_sum.clear();
+    s.row_sum.resize(w, 0.0);
+    let first_row = v0 + pad;
+    for row in first_row - 2..first_row + stats.len() / w {
+        let slot = row % 3;
+        let first = row * pw + pad - 2;
+        let out = &mut s.pairs[slot * HALF_DISC.len() * ew..][..HALF_DISC.len() * ew];
+        // The offsets one image row apart at a time (HALF_DISC is in
+        // that order): the centre row is loaded once per group, and the
+        // other row once per plane. The group sizes (2, 5, 3) and the
+        // other rows' bases (`dv * pw + du` of a group's first offset:
+        // 1, pw - 2, 2 * pw - 1) are HALF_DISC's, checked here:
+        const {
+            assert!(
+                disc_row_run(0, 2, 1, 0)
+                    && disc_row_run(2, 5, -2, 1)
+                    && disc_row_run(7, 3, -1, 2)
+                    && HALF_DISC.len() == 2 + 5 + 3
+            )
         };
-        let terms: [&[f32]; 20] = DISC_TERMS.map(|(k, dv, shift)| term(k, dv, shift));
-        // Two passes of ten terms: twenty streams at once do not fit the
-        // registers.
-        let out = &mut self.row_sum[..w];
-        for (u, o) in out.iter_mut().enumerate() {
-            let mut s = terms[0][u];
-            for t in &terms[1..10] {
-                s += t[u];
-            }
-            *o = s;
+        let (same_row, out) = out.split_at_mut(2 * ew);
+        let (next_row, two_rows) = out.split_at_mut(5 * ew);
+        pair_distances::<2>(planes, first, first + 1, same_row);
+        pair_distances::<5>(planes, first, first + pw - 2, next_row);
+        pair_distances::<3>(planes, first, first + 2 * pw - 1, two_rows);
+        if row < first_row {
+            continue;
         }
-        for (u, o) in out.iter_mut().enumerate() {
-            let mut s = *o;
-            for t in &terms[10..] {
-                s += t[u];
+        disc_row_sums(&s.pairs, row, ew, &mut s.row_sum);
+        let v = row - first_row;
+        let centre = row * pw + pad;
+        // The sum is NaN where the centre or a neighbour has no reading;
+        // blocks with a measured centre among those take the mean of the
+        // neighbours present (with `present`, at least MIN_PRESENT) or
+        // the exact window search.
+        const BLOCK: usize = 32;
+        let stats = &mut stats[v * w..(v + 1) * w];
+        let measured = &zs[centre..centre + w];
+        let blocks = stats
+            .chunks_mut(BLOCK)
+            .zip(s.row_sum[..w].chunks(BLOCK).zip(measured.chunks(BLOCK)));
+        let mut starts = None;
+        for (b, (stats, (sums, block_z))) in blocks.enumerate() {
+            let mut missing = false;
+            for ((stat, &sum), &z) in stats.iter_mut().zip(sums).zip(block_z) {
+                *stat = sum / M as f32;
+                missing |= sum.is_nan() & z.is_finite();
             }
-            *o = s;
+            if !missing {
+                continue;
+            }
+            let starts = starts.get_or_insert_with(|| disc_starts(row, ew));
+            for (u, (stat, z)) in stats.iter_mut().zip(block_z).enumerate() {
+                if stat.is_nan() && z.is_finite() {
+                    let u = b * BLOCK + u;
+                    let near = present.then(|| present_mean(&s.pairs, starts, u)).flatten();
+                    *stat = near.unwrap_or_else(|| fallback_disc([xs, ys, zs], centre + u, pw));
+                }
+            }
         }
+    }
+}
+
+/// Sums the 20 pair distances of every pixel of padded row `row` into
+/// `row_sum`, in a fixed order that sets the f32 rounding of the
+/// statistic (pinned bit for bit by the test
+/// `a_complete_disc_sums_its_distances_in_f32_in_a_fixed_order`): the
+/// pairs from two rows up, from one row up, then the row's own.
+fn disc_row_sums(pairs: &[f32], row: usize, ew: usize, row_sum: &mut [f32]) {
+    let w = ew - 4;
+    // Pixel u sits at column e = u + 2 of a pair row; the pair (k) seen
+    // from its other end is at column e - du_k of row row - dv_k.
+    let term = |k: usize, dv: usize, shift: isize| -> &[f32] {
+        let base = ((row - dv) % 3 * HALF_DISC.len() + k) * ew;
+        let start = (2 - shift) as usize;
+        &pairs[base + start..base + start + w]
+    };
+    let terms: [&[f32]; 20] = DISC_TERMS.map(|(k, dv, shift)| term(k, dv, shift));
+    // Two passes of ten terms: twenty streams at once do not fit the
+    // registers.
+    let out = &mut row_sum[..w];
+    for (u, o) in out.iter_mut().enumerate() {
+        let mut s = terms[0][u];
+        for t in &terms[1..10] {
+            s += t[u];
+        }
+        *o = s;
+    }
+    for (u, o) in out.iter_mut().enumerate() {
+        let mut s = *o;
+        for t in &terms[10..] {
+            s += t[u];
+        }
+        *o = s;
     }
 }
 

@@ -56,7 +56,10 @@
 //! statistic of a pixel with all 20 grid neighbours is bit-identical to
 //! accumulating its pairs one offset at a time; fallback sums differ from a
 //! sort-based selection only in f32 rounding (<= 5e-7 relative on the
-//! recorded frames, no verdict changed).
+//! recorded frames, no verdict changed). With a thread pool
+//! ([`StatisticalOutlierFilter::filter_on`]) the rows are cut into bands,
+//! two per thread, each started two pair rows early: every statistic and
+//! verdict is the same bits as on one thread.
 //!
 //! One concern per file: `grid_disc.rs` (the m = 20 grid path),
 //! `fallback.rs` (the exact window search and the branch-free selection),
@@ -73,6 +76,7 @@ use crate::cloud::CloudView;
 
 pub use config::{Fallback, OutlierConfig};
 use fallback::TAIL;
+use grid_disc::DiscScratch;
 
 /// The largest `m` the grid search supports: all pixels of a 7x7 window.
 pub const MAX_NEIGHBOURS: usize = 48;
@@ -97,9 +101,9 @@ pub struct StatisticalOutlierFilter {
     ys: Vec<f32>,
     zs: Vec<f32>,
     mean_distance: Vec<f32>,
-    /// m = 20 path: the pair distances of the last three rows, one row per
-    /// half-disc offset and row slot.
-    pairs: Vec<f32>,
+    /// m = 20 path: the scratch of each band of rows.
+    disc_scratch: Vec<DiscScratch>,
+    /// General path.
     row_sum: Vec<f32>,
     row_count: Vec<f32>,
     row_value: Vec<f32>,
@@ -138,6 +142,21 @@ impl StatisticalOutlierFilter {
         config: &OutlierConfig,
         keep: &mut Vec<bool>,
     ) -> OutlierStats {
+        self.filter_on(cloud, config, keep, None)
+    }
+
+    /// [`Self::filter`], with the m = 20 statistic computed in bands of
+    /// rows on `pool`'s threads: the same statistics and verdicts, bit for
+    /// bit (each pixel's statistic is computed as on one thread; the mean
+    /// and spread are summed on the caller's thread). Other m run on the
+    /// caller's thread.
+    pub fn filter_on(
+        &mut self,
+        cloud: &CloudView<'_>,
+        config: &OutlierConfig,
+        keep: &mut Vec<bool>,
+        pool: Option<&rayon::ThreadPool>,
+    ) -> OutlierStats {
         let (w, h) = (cloud.width, cloud.height);
         let n = w * h;
         if cloud.points.len() != n || n == 0 {
@@ -154,7 +173,7 @@ impl StatisticalOutlierFilter {
         self.mean_distance.resize(n, f32::NAN);
         if m == 20 {
             let present = config.fallback == Fallback::PresentNeighbours;
-            self.grid_disc_statistic(w, h, r_fb, present);
+            self.grid_disc_statistic((w, h, r_fb), present, pool);
         } else {
             self.mean_distance.fill(f32::NAN);
             self.square_window_statistic(w, h, r, r_fb, m);

@@ -454,3 +454,55 @@ fn empty_and_invalid_clouds_keep_nothing() {
     assert_eq!(stats.kept, 0);
     assert!(keep.iter().all(|k| !k));
 }
+
+#[test]
+fn bands_of_rows_on_threads_give_every_statistic_and_verdict_bit_for_bit() {
+    // Heights that split into bands of unequal size and bands of one or two
+    // rows (fewer rows than bands are asked for too).
+    for (width, height) in [(160, 121), (37, 5), (40, 3)] {
+        let cloud = if height > 100 {
+            holed_fixture(width, height, 5)
+        } else {
+            // Too small for the fixture's forty flying pixels kept apart.
+            let mut cloud = SceneCloud::render(&Scene::ramp(16.0), width, height, 0.0015, 5);
+            for i in (0..cloud.points.len()).step_by(7) {
+                cloud.points[i] = slope_ipc_types::CloudPoint::INVALID;
+            }
+            cloud
+        };
+        let view = cloud.view();
+        for fallback in [Fallback::ExactWindow, Fallback::PresentNeighbours] {
+            let config = OutlierConfig {
+                fallback,
+                ..OutlierConfig::default()
+            };
+            let mut one = StatisticalOutlierFilter::new();
+            let mut keep_one = Vec::new();
+            let stats_one = one.filter(&view, &config, &mut keep_one);
+            for threads in [2, 3] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let mut many = StatisticalOutlierFilter::new();
+                let mut keep_many = Vec::new();
+                // Twice: the second run reuses the bands' buffers.
+                many.filter_on(&view, &config, &mut keep_many, Some(&pool));
+                let stats_many = many.filter_on(&view, &config, &mut keep_many, Some(&pool));
+                let bits = |f: &StatisticalOutlierFilter| -> Vec<u32> {
+                    f.mean_distances().iter().map(|d| d.to_bits()).collect()
+                };
+                let case = format!("{width}x{height} {fallback:?} {threads} threads");
+                assert_eq!(bits(&one), bits(&many), "{case}");
+                assert_eq!(keep_one, keep_many, "{case}");
+                assert_eq!(stats_one, stats_many, "{case}");
+            }
+        }
+    }
+    // The fixture reaches the fallback and every verdict.
+    let cloud = holed_fixture(160, 121, 5);
+    let mut filter = StatisticalOutlierFilter::new();
+    let mut keep = Vec::new();
+    let stats = filter.filter(&cloud.view(), &OutlierConfig::default(), &mut keep);
+    assert!(stats.kept > 0 && stats.removed > 0, "{stats:?}");
+}

@@ -87,8 +87,9 @@ pub struct EstimatorArgs {
     pub health_interval: Option<f64>,
 
     /// Threads a frame's stages may run on (1-64; default 1, or the config
-    /// file's `[estimator] threads`): with 2 the ground's and the inclined
-    /// plane's normals run at once; the estimate is the same.
+    /// file's `[estimator] threads`): with 2 the outlier filter and the
+    /// labelling of the planes run in bands of rows, and the ground's and
+    /// the inclined plane's normals at once; the estimate is the same.
     #[arg(long, value_parser = threads_arg)]
     pub threads: Option<usize>,
     /// Largest cloud (width x height) to estimate: a larger one is refused
