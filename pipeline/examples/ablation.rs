@@ -124,7 +124,7 @@ const CHANGES: [Change; 12] = [
                 Proposal::Sequential
             }
         },
-        kept: false,
+        kept: true,
     },
     Change {
         name: "11 outlier statistic of the present neighbours",
@@ -136,7 +136,7 @@ const CHANGES: [Change; 12] = [
                 Fallback::ExactWindow
             }
         },
-        kept: false,
+        kept: true,
     },
 ];
 

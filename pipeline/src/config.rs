@@ -1,7 +1,7 @@
 //! [`EstimatorConfig`]: every parameter of the pipeline, read from TOML.
 //! The defaults keep the paper's parameters (m = 20, alpha = 2, the
-//! 10,000-point cap, K = 100) with our documented changes 1-7 switched on
-//! (pipeline README, "What we do differently");
+//! 10,000-point cap, K = 100) with our documented changes 1-7, 10 and 11
+//! switched on (pipeline README, "What we do differently");
 //! [`EstimatorConfig::paper_literal`] is the paper as written. Each stage
 //! owns its section's struct and range checks; this file only assembles
 //! them.
@@ -78,8 +78,9 @@ pub enum ConfigError {
 }
 
 /// All parameters of the estimator. `Default` keeps the paper's parameters
-/// and switches on the documented changes 1-7 (pipeline README; 8 and 9 are
-/// options, off); [`Self::paper_literal`] switches those changes off.
+/// and switches on the documented changes 1-7, 10 and 11 (pipeline README; 8
+/// and 9 are options, off); [`Self::paper_literal`] switches those changes
+/// off.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct EstimatorConfig {
@@ -238,8 +239,8 @@ mod tests {
     use super::*;
 
     /// The default and the paper as written share the paper's parameters
-    /// and every other key but the nine of the documented changes 1-7,
-    /// which the default switches on; 8 and 9 are off in both.
+    /// and every other key but the eleven of the documented changes 1-7, 10
+    /// and 11, which the default switches on; 8 and 9 are off in both.
     #[test]
     fn defaults_keep_the_papers_parameters_with_the_documented_changes_on() {
         use crate::literal::{
@@ -260,6 +261,12 @@ mod tests {
         assert_eq!(ours.outlier.neighbourhood, OutlierNeighbourhood::Grid);
         assert_eq!(paper.ransac.scoring, RansacScoring::EveryPoint);
         assert_eq!(ours.ransac.scoring, RansacScoring::SampleGrid);
+        use crate::segmentation::Proposal;
+        use crate::statistical_outlier::Fallback;
+        assert_eq!(paper.segmentation.proposal, Proposal::Sequential);
+        assert_eq!(ours.segmentation.proposal, Proposal::Cells);
+        assert_eq!(paper.outlier.fallback, Fallback::ExactWindow);
+        assert_eq!(ours.outlier.fallback, Fallback::PresentNeighbours);
         assert_eq!(paper.ransac.distance_threshold_per_m2, 0.0);
         assert_eq!(ours.ransac.distance_threshold_per_m2, 0.003);
         assert_eq!(paper.normals.neighbourhood, NormalsNeighbourhood::KdTree);

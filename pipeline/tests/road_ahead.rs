@@ -381,6 +381,52 @@ fn a_ramp_whose_foot_a_box_hides_still_stands() {
     }
 }
 
+/// A box 0.6 m high from 1.5 to 3.5 m ahead whose top begins with a strip
+/// falling away by 12 degrees (0.4 m deep, 8.5 cm down, then back up: like
+/// a bump on a bed's cover), seen from 1.2 m up: the strip's continuation runs under
+/// the box's top, hidden, but the strip falls away from the robot, so its
+/// near edge is in the air and it is elevated, no ramp with a hidden foot.
+/// The box's front face, a wall on the floor, is the road.
+#[test]
+fn a_surface_falling_away_on_a_box_is_elevated_though_its_continuation_is_hidden() {
+    let t = 12f64.to_radians();
+    let drop = 0.4 * t.tan();
+    let strip = plane(
+        [0.0, t.sin(), t.cos()],
+        [0.0, 1.5, 0.6],
+        [-0.6, 1.5, 0.6 - drop - 0.01],
+        [0.6, 1.9, 0.61],
+    );
+    let s = scene(
+        1.2,
+        -30.0,
+        90.0,
+        vec![
+            floor(BIG),
+            riser(1.5, 0.0, 0.6, 0.6),
+            strip,
+            riser(1.9, 0.6 - drop - 0.01, 0.6, 0.6),
+            tread(0.6, 1.9, 3.5, 0.6),
+            riser(3.5, 0.0, 0.6, 0.6),
+        ],
+    );
+    for e in estimates(&s) {
+        let strip = the(&e, 12.0, 1.5, 0.15);
+        assert_eq!(
+            (strip.role, strip.support, strip.joins_ground),
+            (SurfaceRole::Elevated, SurfaceSupport::None, false),
+            "{strip:?}"
+        );
+        assert!(strip.slope_deg < 0.0 && strip.measurable, "{strip:?}");
+        let face = road(&e);
+        assert_eq!(
+            (face.role, face.support),
+            (SurfaceRole::Wall, SurfaceSupport::Ground)
+        );
+        assert_ok_within(&e, 90.0, 1.5);
+    }
+}
+
 /// A 12 degree ramp straight ahead at 2.5 m, and a 20 degree ramp off to the
 /// left, nearer, rising 40 degrees left of forward: both ramps on the floor,
 /// only the first in the corridor, so it is the road.

@@ -8,6 +8,7 @@ use nalgebra::Vector3;
 use slope_ipc_types::CloudPoint;
 
 use super::sample::cell_neighbourhood;
+use super::sample_axis::SampleAxis;
 use super::{PlaneSegmenter, SegmentedPlane, Threshold, NO_PLANE};
 use crate::cloud::{is_measured, to_vec3, CloudView};
 use crate::plane_fit::{MomentSums, Moments, Plane};
@@ -146,8 +147,8 @@ impl PlaneSegmenter {
             found,
             t,
             candidates: &self.cell_candidates,
-            stride: self.sample.stride,
-            coarse: (self.sample.coarse_w, self.sample.coarse_h),
+            columns: &self.sample.columns,
+            rows: &self.sample.rows,
         };
         let jobs = self.bands[..bands].iter_mut().enumerate();
         match self.workers.as_deref() {
@@ -200,20 +201,19 @@ struct RunGrid<'a> {
     found: &'a [Plane],
     t: Threshold,
     candidates: &'a [([u16; 9], u8)],
-    stride: usize,
-    /// Sample cells across and down.
-    coarse: (usize, usize),
+    /// The sample columns and rows, and the pixels each stands for.
+    columns: &'a SampleAxis,
+    rows: &'a SampleAxis,
 }
 
 impl RunGrid<'_> {
     /// Labels the rows of band `b` into `band`.
     fn label_band(&self, b: usize, band: &mut LabelBand) {
         let (w, h) = (self.cloud.width, self.cloud.height);
-        let (s, half) = (self.stride, self.stride / 2);
-        let (cw, ch) = self.coarse;
+        let cw = self.columns.len();
+        let runs = &self.columns.run_start;
         // Each row is walked a sample cell's columns at a time: pixels
         // of one run share their candidate planes (none: skipped whole).
-        let run_start = |c: usize| if c == 0 { 0 } else { c * s + half };
         let mut labeller = RunLabeller {
             inliers: &mut band.inliers,
             sums: &mut band.sums,
@@ -221,19 +221,14 @@ impl RunGrid<'_> {
             t: self.t,
         };
         for v in b * LABEL_BAND_ROWS..((b + 1) * LABEL_BAND_ROWS).min(h) {
-            let row = (v.saturating_sub(half) / s).min(ch - 1) * cw;
+            let row = self.rows.of_pixel[v] as usize * cw;
             for column in 0..cw {
                 let (candidates, n) = &self.candidates[row + column];
                 if *n == 0 {
                     continue;
                 }
-                let end = if column + 1 == cw {
-                    w
-                } else {
-                    run_start(column + 1)
-                };
-                let first = v * w + run_start(column);
-                let run = first..v * w + end.min(w);
+                let first = v * w + runs[column] as usize;
+                let run = first..v * w + runs[column + 1] as usize;
                 let (keep, points) = (&self.keep[run.clone()], &self.cloud.points[run]);
                 match &candidates[..*n as usize] {
                     &[k] => labeller.one(k as usize, first, keep, points),

@@ -58,7 +58,8 @@
 //! neighbour).
 //!
 //! One concern per file: `sample.rs` (the sample grid and its coarse
-//! normals), `points.rs` (the `f32` structure of arrays and the inlier
+//! normals), `sample_axis.rs` (which pixels are sample points, and which
+//! pixels each stands for: symmetric under a mirror), `points.rs` (the `f32` structure of arrays and the inlier
 //! test the inner loops run), `hypotheses.rs` (drawing, scoring, local
 //! optimisation), `regions.rs` (the largest connected region),
 //! `labelling.rs` (cell relaxation and the full-resolution labelling).
@@ -77,10 +78,12 @@ mod labelling;
 mod points;
 mod regions;
 mod sample;
+mod sample_axis;
 
 pub use config::RansacConfig;
 use points::{Gate, Points};
 use sample::SampleGrid;
+pub use sample_axis::SampleAxis;
 
 /// One segmented plane.
 #[derive(Debug, Clone)]
@@ -98,8 +101,9 @@ pub struct SegmentedPlane {
 }
 
 /// What a plane proposal sees of the sample grid (every
-/// `sample_stride_px`-th pixel in both directions, from pixel
-/// `stride / 2`), and where it says which plane takes each sample cell.
+/// `sample_stride_px`-th pixel in both directions, counted from the nearer
+/// edge: [`SampleAxis`]), and where it says which plane takes each sample
+/// cell.
 #[derive(Debug)]
 pub struct SampleCells<'a> {
     /// Sample cells per row and per column.
@@ -107,6 +111,9 @@ pub struct SampleCells<'a> {
     pub height: usize,
     /// Pixels between sample points.
     pub stride: usize,
+    /// The sample columns and rows, and the pixels each stands for.
+    pub columns: &'a SampleAxis,
+    pub rows: &'a SampleAxis,
     /// Per sample cell (raster order): its kept sample point, NaN if none.
     pub points: &'a [Vector3<f64>],
     /// Per sample cell: the index of the proposed plane that takes it,
@@ -234,6 +241,8 @@ impl PlaneSegmenter {
             width: self.sample.coarse_w,
             height: self.sample.coarse_h,
             stride: self.sample.stride,
+            columns: &self.sample.columns,
+            rows: &self.sample.rows,
             points: &self.sample.cell_point,
             labels: &mut self.cell_plane,
         };

@@ -1,10 +1,11 @@
-//! The sample grid: every `sample_stride_px`-th pixel in both directions,
-//! with its coarse normal; the free points (not yet taken by a plane) as
+//! The sample grid: every `sample_stride_px`-th pixel in both directions
+//! (counted from the nearer edge, `sample_axis.rs`), with its coarse normal; the free points (not yet taken by a plane) as
 //! [`Points`], and per coarse cell its free point and its original point.
 
 use nalgebra::Vector3;
 
 use super::points::Points;
+use super::sample_axis::SampleAxis;
 use super::RansacConfig;
 use super::Threshold;
 use crate::cloud::{is_measured, to_vec3, CloudView};
@@ -32,6 +33,9 @@ pub(super) struct SampleGrid {
     pub coarse_w: usize,
     pub coarse_h: usize,
     pub stride: usize,
+    /// The sample columns and rows, and the pixels each stands for.
+    pub columns: SampleAxis,
+    pub rows: SampleAxis,
     /// Scratch for [`Self::compact`]: the free points removed, and kept.
     removed: Vec<u32>,
     keep: Vec<u32>,
@@ -51,12 +55,15 @@ impl SampleGrid {
         let s = config.sample_stride_px.max(1);
         let (w, h) = (cloud.width, cloud.height);
         self.stride = s;
-        self.coarse_w = w.saturating_sub(s / 2).div_ceil(s);
-        self.coarse_h = h.saturating_sub(s / 2).div_ceil(s);
+        self.columns.build(w, s);
+        self.rows.build(h, s);
+        self.coarse_w = self.columns.len();
+        self.coarse_h = self.rows.len();
         self.points.reserve(self.coarse_w * self.coarse_h);
         let radius = 2;
-        for (row, v) in (s / 2..h).step_by(s).enumerate() {
-            for (column, u) in (s / 2..w).step_by(s).enumerate() {
+        for (row, &v) in self.rows.at.iter().enumerate() {
+            for (column, &u) in self.columns.at.iter().enumerate() {
+                let (u, v) = (u as usize, v as usize);
                 let i = v * w + u;
                 if !keep[i] || !is_measured(&cloud.points[i]) {
                     continue;

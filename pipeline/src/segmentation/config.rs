@@ -12,14 +12,12 @@ use crate::validate::{angle, check, count_in, positive, InvalidValue};
 pub enum Proposal {
     /// Planar cells of the pixel grid grown into regions, each region's
     /// plane fitted by RANSAC over its own points and flooded over its
-    /// band (`segmentation/cells/`). An option: with it every accuracy
-    /// test holds but the mirror gap of `tests/mirror_invariance.rs`
-    /// (pipeline README, item 10).
+    /// band (`segmentation/cells/`; the default).
+    #[default]
     Cells,
     /// RANSAC extractions one after another on the sample grid, each plane
     /// the largest connected region of the best hypothesis's inliers
-    /// (`ransac_planes/`; the default).
-    #[default]
+    /// (`ransac_planes/`; an option, which the ablation compares).
     Sequential,
 }
 
@@ -47,7 +45,7 @@ pub struct SegmentationConfig {
 impl Default for SegmentationConfig {
     fn default() -> Self {
         Self {
-            proposal: Proposal::Sequential,
+            proposal: Proposal::Cells,
             cell_size_px: 8,
             cell_point_step_px: 2,
             cell_rms_ratio: 0.5,

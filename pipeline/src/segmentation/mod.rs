@@ -2,17 +2,15 @@
 //! filter kept, each with its inliers in pixel order
 //! ([`SegmentedPlane`]), by one of two designs (`segmentation.proposal`):
 //!
-//! - `"sequential"` (the default, `ransac_planes/`): RANSAC extractions
-//!   one after another on a sample of the pixel grid, each plane the
-//!   largest connected region of the best hypothesis's inliers;
-//! - `"cells"` (`cells/`): planar cells of the pixel grid grown into
-//!   regions propose the planes, the paper's RANSAC fits each region's
-//!   plane over the region's own points and the plane floods its band on
-//!   the sample grid; the sequential extraction then runs on what no
-//!   proposed plane explains. An option, not the default: every accuracy
-//!   test holds with it (the real frames, the simulated ramps, the
-//!   cluttered and road-ahead scenes) but the mirror gap of
-//!   `tests/mirror_invariance.rs` (pipeline README, item 10).
+//! - `"cells"` (the default, `cells/`): planar cells of the pixel grid
+//!   grown into regions propose the planes, the paper's RANSAC fits each
+//!   region's plane over the region's own points and the plane floods its
+//!   band on the sample grid; the sequential extraction then runs on what
+//!   no proposed plane explains;
+//! - `"sequential"` (`ransac_planes/`, an option the ablation compares):
+//!   RANSAC extractions one after another on a sample of the pixel grid,
+//!   each plane the largest connected region of the best hypothesis's
+//!   inliers.
 //!
 //! Both end the same way: every kept pixel goes to the nearest plane of
 //! the sample cells around it within the inlier distance, and each plane

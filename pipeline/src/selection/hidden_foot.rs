@@ -17,6 +17,14 @@
 //! The foot is hidden when at least [`MIN_HIDDEN`] points are hidden and at
 //! most a fifth as many are seen past. Points outside the image or without
 //! a reading count for neither.
+//!
+//! Only a surface that rises away from the robot can stand on the ground
+//! out of sight in front of it: its foot is its near edge, the one the
+//! robot drives onto. A surface falling away (its uphill direction more
+//! than [`MAX_FOOT_TURN_DEG`] from forward: it descends from its near
+//! edge) would meet the ground beyond itself, and its near edge, the one
+//! the robot reaches first, is in the air: a bump on a bed's cover whose
+//! continuation runs under the bed's top is hidden, but no road.
 
 use nalgebra::Vector3;
 
@@ -34,6 +42,10 @@ pub const MIN_HIDDEN: usize = 3;
 /// The continuation is followed at most this far down the fall line,
 /// metres.
 const MAX_MARCH_M: f64 = 3.0;
+/// A surface's uphill direction must be within this of forward (degrees,
+/// either side) for its foot to be looked for: a ramp ahead or to the
+/// side, not one falling away.
+pub const MAX_FOOT_TURN_DEG: f64 = 120.0;
 
 /// True when the foot of `surface` (whose inliers are `inliers`, pixel
 /// indices of `cloud`) is hidden behind something nearer, never seen past.
@@ -50,6 +62,11 @@ pub fn foot_is_hidden(
     let rise_per_m = fall.dot(&frame.up);
     if rise_per_m < 0.05 {
         // Nearly level: its continuation never reaches the ground nearby.
+        return false;
+    }
+    let uphill = (fall - frame.up * rise_per_m).normalize();
+    if uphill.dot(&frame.forward) < MAX_FOOT_TURN_DEG.to_radians().cos() {
+        // Falling away from the robot: its foot is beyond it.
         return false;
     }
     let mut counts = Counts::default();

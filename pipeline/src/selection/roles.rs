@@ -23,7 +23,8 @@
 //!    more (an obstacle, a riser: a staircase's risers each stand on the
 //!    tread below).
 //! 5. An inclined surface that meets nothing but whose foot is hidden
-//!    behind something nearer (`hidden_foot.rs`) is a `ramp` or `wall`
+//!    behind something nearer (`hidden_foot.rs`; a surface rising away from
+//!    the robot or to a side, not one falling away) is a `ramp` or `wall`
 //!    whose support is `hidden`: it may stand on the ground out of sight.
 //!    Only surfaces that could be the road (flat at the noise level and
 //!    large enough) are looked at.

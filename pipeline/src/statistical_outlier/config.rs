@@ -33,12 +33,11 @@ pub struct OutlierConfig {
 #[serde(rename_all = "kebab-case")]
 pub enum Fallback {
     /// The mean distance to the grid neighbours it has, with at least 10;
-    /// else the exact window. An option: it fails one cluttered-scene test
-    /// (pipeline README).
+    /// else the exact window (the default; pipeline README, item 11).
+    #[default]
     PresentNeighbours,
     /// The mean distance to its 20 nearest measured pixels of the 9x9
-    /// window, exactly (the default).
-    #[default]
+    /// window, exactly (the paper's statistic).
     ExactWindow,
 }
 
@@ -49,7 +48,7 @@ impl Default for OutlierConfig {
             neighbours: 20,
             std_ratio: 2.0,
             neighbourhood: crate::literal::OutlierNeighbourhood::Grid,
-            fallback: Fallback::ExactWindow,
+            fallback: Fallback::PresentNeighbours,
             depth_range_m: None,
         }
     }

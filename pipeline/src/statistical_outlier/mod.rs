@@ -18,9 +18,9 @@
 //! scenes); that only trims the borders of planes. A pixel with fewer than m
 //! measured grid neighbours takes the mean distance to the grid neighbours
 //! it has when it has at least half of them (`fallback =
-//! "present-neighbours"`, an option), else (and with `fallback =
-//! "exact-window"`, the default) the m nearest measured pixels of the 9x9
-//! window (exactly); one with fewer than m even there is isolated and
+//! "present-neighbours"`, the default), else (and with `fallback =
+//! "exact-window"`, the paper's statistic) the m nearest measured pixels of
+//! the 9x9 window (exactly); one with fewer than m even there is isolated and
 //! dropped. For other m the candidates are the smallest square window with
 //! at least m others, of which the m nearest are taken.
 //!
@@ -40,10 +40,9 @@
 //! to the nearest 20 of its 9x9 window, which takes farther pixels to make
 //! up the missing ones; its statistic is smaller, so the borders of holes
 //! keep a few more points: on the real frames and ramp16 0.25-1.0 % of the
-//! verdicts change and the slopes move by at most 0.25 degrees, less than
-//! their spread over seeds, `tests/outlier_fallback.rs`; but a cluttered
-//! scene's shallow ramp at 3 m is lost, which is why it is not the
-//! default), or, with fewer than 10 (and by default), the exact window. The exact window
+//! verdicts change and the slopes move by at most 0.09 degrees, less than
+//! their spread over seeds, `tests/outlier_fallback.rs`), or, with fewer
+//! than 10 (and with `"exact-window"`), the exact window. The exact window
 //! search computes the 80 squared
 //! distances of the 9x9 window (a missing one as infinity) and selects the
 //! 20 smallest without branches: two sorting-network rounds over four

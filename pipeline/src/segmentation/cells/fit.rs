@@ -14,6 +14,7 @@ use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 
 use super::boundary::flood_band;
+use super::grid::CellGrid;
 use crate::plane_fit::{fit_tls, Moments, Plane};
 use crate::ransac_planes::{RansacConfig, SampleCells, Threshold, NO_PLANE};
 
@@ -53,14 +54,13 @@ pub(super) struct FitTarget {
 }
 
 impl RegionFit {
-    /// Fits the free sample points of `region` (cells of a `k x k` block
-    /// grid `grid_w` wide over the sample grid) and labels the plane's
+    /// Fits the free sample points of `region` (cells of `grid`) and labels the plane's
     /// sample cells `target.label`; `None` (and no label) when no plane has
     /// 3 inliers or its surface holds fewer than `target.min_cells` cells.
     pub fn fit(
         &mut self,
         cells: &mut SampleCells<'_>,
-        (region, grid_w, k): (&[u32], usize, usize),
+        (region, grid): (&[u32], &CellGrid),
         target: FitTarget,
         config: &RansacConfig,
         rng: &mut ChaCha8Rng,
@@ -70,7 +70,7 @@ impl RegionFit {
             t,
             min_cells,
         } = target;
-        self.gather(cells, region, grid_w, k, t);
+        self.gather(cells, region, grid, t);
         if self.points.len() < min_cells.max(3) {
             return None;
         }
@@ -147,21 +147,14 @@ impl RegionFit {
     }
 
     /// The region's free sample points (raster order within each cell).
-    fn gather(
-        &mut self,
-        cells: &SampleCells<'_>,
-        region: &[u32],
-        grid_w: usize,
-        k: usize,
-        t: Threshold,
-    ) {
+    fn gather(&mut self, cells: &SampleCells<'_>, region: &[u32], grid: &CellGrid, t: Threshold) {
         self.points.clear();
         self.sample_cells.clear();
         self.limits.clear();
         for &c in region {
-            let (cu, cv) = (c as usize % grid_w, c as usize / grid_w);
-            for row in cv * k..((cv + 1) * k).min(cells.height) {
-                for column in cu * k..((cu + 1) * k).min(cells.width) {
+            let (cu, cv) = (c as usize % grid.width, c as usize / grid.width);
+            for row in grid.rows_of.samples(cv) {
+                for column in grid.columns_of.samples(cu) {
                     let j = row * cells.width + column;
                     let p = cells.points[j];
                     if p.x.is_finite() && cells.labels[j] == NO_PLANE {

@@ -3,15 +3,17 @@
 //! plane, and whether it is planar.
 //!
 //! A pixel belongs to the cell of its sample cell (the labelling's own
-//! mapping, `ransac_planes/labelling.rs`): pixel column `u` is in sample
-//! column `(u - stride / 2) / stride` (clamped), so a cell's pixels are the
-//! pixels its sample cells label.
+//! mapping, `ransac_planes/sample_axis.rs`: the nearest sample point), so
+//! a cell's pixels are the pixels its sample cells label. The sample
+//! cells are grouped `k` to a cell from both ends of each axis towards the
+//! middle ([`CellAxis`]), as the sample points are counted from both
+//! edges: the mirror image of a frame has the mirrored cells.
 
 use nalgebra::Vector3;
 
 use crate::cloud::{is_measured, CloudView};
 use crate::plane_fit::smallest_eigenvector_3x3;
-use crate::ransac_planes::Threshold;
+use crate::ransac_planes::{SampleAxis, Threshold};
 
 /// Sums of a cell's points about the camera: count, x, y, z, xx, xy, xz,
 /// yy, yz, zz. About the origin, not the centroid: a cell spans
@@ -76,14 +78,66 @@ impl SumsPlane {
     }
 }
 
+/// One axis of the cell grid: its sample cells grouped `k` to a cell from
+/// both ends towards the middle, `ceil(floor(n / 2) / k)` cells on each
+/// side and, for an odd number `n` of sample cells, the middle one a cell
+/// of its own. With `n` a multiple of `2 k` (128 sample columns of a
+/// Kinect v2 frame in cells of 2): cell `j / k`, as from one end.
+#[derive(Debug, Default, Clone)]
+pub(super) struct CellAxis {
+    /// Per sample cell: its cell.
+    pub of_sample: Vec<u32>,
+    /// Per cell: its first sample cell; then the number of sample cells
+    /// (cell `c` holds sample cells `start[c]..start[c + 1]`).
+    pub start: Vec<u32>,
+}
+
+impl CellAxis {
+    /// The cells of an axis of `n` sample cells, `k` (at least 1) to a cell.
+    pub fn build(&mut self, n: usize, k: usize) {
+        let k = k.max(1);
+        let half = n / 2;
+        let side = half.div_ceil(k);
+        let count = 2 * side + n % 2;
+        self.of_sample.clear();
+        self.of_sample.extend((0..n).map(|j| {
+            (if j < half {
+                j / k
+            } else if j >= n - half {
+                count - 1 - (n - 1 - j) / k
+            } else {
+                side
+            }) as u32
+        }));
+        self.start.clear();
+        for (j, &c) in self.of_sample.iter().enumerate() {
+            if j == 0 || c != self.of_sample[j - 1] {
+                self.start.push(j as u32);
+            }
+        }
+        self.start.push(n as u32);
+    }
+
+    /// Number of cells.
+    pub fn len(&self) -> usize {
+        self.start.len().saturating_sub(1)
+    }
+
+    /// The sample cells of cell `c`.
+    pub fn samples(&self, c: usize) -> std::ops::Range<usize> {
+        self.start[c] as usize..self.start[c + 1] as usize
+    }
+}
+
 /// The cells of one frame.
 #[derive(Debug, Default, Clone)]
 pub(super) struct CellGrid {
     /// Cells per row and per column.
     pub width: usize,
     pub height: usize,
-    /// Sample cells per cell side.
-    pub k: usize,
+    /// The cells' columns and rows of sample cells.
+    pub columns_of: CellAxis,
+    pub rows_of: CellAxis,
     pub sums: Vec<RawSums>,
     /// Per cell: its plane when planar.
     pub planar: Vec<Option<SumsPlane>>,
@@ -96,10 +150,10 @@ pub(super) struct CellGrid {
 
 /// What [`CellGrid::load`] needs of the sample grid and the config.
 #[derive(Debug, Clone, Copy)]
-pub(super) struct CellLayout {
-    /// Sample cells per row and per column, pixels between sample points.
-    pub sample_w: usize,
-    pub sample_h: usize,
+pub(super) struct CellLayout<'a> {
+    /// The sample columns and rows, pixels between sample points.
+    pub columns: &'a SampleAxis,
+    pub rows: &'a SampleAxis,
     pub stride: usize,
     /// Sample cells per cell side.
     pub k: usize,
@@ -112,13 +166,24 @@ pub(super) struct CellLayout {
 impl CellGrid {
     /// Sums the kept, measured pixels of `cloud` into their cells and
     /// decides which cells are planar.
-    pub fn load(&mut self, cloud: &CloudView<'_>, keep: &[bool], layout: CellLayout, t: Threshold) {
+    pub fn load(
+        &mut self,
+        cloud: &CloudView<'_>,
+        keep: &[bool],
+        layout: CellLayout<'_>,
+        t: Threshold,
+    ) {
         let CellLayout {
-            k, step, stride, ..
+            k,
+            step,
+            columns,
+            rows,
+            ..
         } = layout;
-        self.k = k;
-        self.width = layout.sample_w.div_ceil(k);
-        self.height = layout.sample_h.div_ceil(k);
+        self.columns_of.build(columns.len(), k);
+        self.rows_of.build(rows.len(), k);
+        self.width = self.columns_of.len();
+        self.height = self.rows_of.len();
         self.sums.clear();
         self.sums.resize(self.width * self.height, [0.0; 10]);
         let (w, h) = (cloud.width, cloud.height);
@@ -127,9 +192,6 @@ impl CellGrid {
             self.badness.clear();
             return;
         }
-        let half = stride / 2;
-        let cell_of =
-            |px: usize, samples: usize| (px.saturating_sub(half) / stride).min(samples - 1) / k;
         // Every step-th column counted from the nearer image edge: the
         // columns summed are symmetric about the image's centre, so the
         // mirror image of a frame sums the mirror image of its pixels.
@@ -140,13 +202,14 @@ impl CellGrid {
                 .map(|u| u as u32),
         );
         self.column_cell.clear();
+        let columns_of = &self.columns_of.of_sample;
         self.column_cell.extend(
             self.columns
                 .iter()
-                .map(|&u| cell_of(u as usize, layout.sample_w) as u32),
+                .map(|&u| columns_of[columns.of_pixel[u as usize] as usize]),
         );
         for v in (0..h).step_by(step) {
-            let base = cell_of(v, layout.sample_h) * self.width;
+            let base = self.rows_of.of_sample[rows.of_pixel[v] as usize] as usize * self.width;
             let row = v * w;
             for (&cu, &u) in self.column_cell.iter().zip(&self.columns) {
                 let u = u as usize;
@@ -174,7 +237,7 @@ impl CellGrid {
 
     /// A cell is planar with at least half its summed pixels measured and
     /// an RMS within `rms_ratio` of the inlier distance at its centroid.
-    fn classify(&mut self, layout: CellLayout, t: Threshold) {
+    fn classify(&mut self, layout: CellLayout<'_>, t: Threshold) {
         let side = (layout.k * layout.stride).div_ceil(layout.step);
         let min_points = ((side * side) as f64 / 2.0).max(3.0);
         self.planar.clear();

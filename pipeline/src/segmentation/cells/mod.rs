@@ -41,9 +41,13 @@
 //! relaxation and final TLS refit on every pixel are the sequential
 //! segmentation's (`ransac_planes/labelling.rs`).
 //!
+//! The sample grid and the cells are their own mirror image (the sample
+//! points counted from the nearer image edge, the cells grouped from both
+//! edges: `grid.rs`), so a mirrored frame gives the mirrored regions.
+//!
 //! What it costs (`Estimator::run` on stairs-front, callgrind): the cells
 //! 5.0 M, region growing 2.0 M, the fits and floods 11.8 M, the extraction
-//! over what is left about 4 M, the labelling 33 M (BENCHMARKS.md).
+//! over what is left 5.2 M, the labelling 30 M (BENCHMARKS.md).
 
 use rand_chacha::ChaCha8Rng;
 
@@ -109,8 +113,8 @@ impl PlaneProposal for ConfiguredCells<'_> {
             .round()
             .max(1.0) as usize;
         let layout = CellLayout {
-            sample_w: cells.width,
-            sample_h: cells.height,
+            columns: cells.columns,
+            rows: cells.rows,
             stride,
             k,
             step: config.cell_point_step_px.max(1),
@@ -143,13 +147,10 @@ impl PlaneProposal for ConfiguredCells<'_> {
                 t,
                 min_cells,
             };
-            if let Some(plane) = p.fit.fit(
-                &mut cells,
-                (region_cells, p.grid.width, k),
-                target,
-                ransac,
-                rng,
-            ) {
+            if let Some(plane) = p
+                .fit
+                .fit(&mut cells, (region_cells, &p.grid), target, ransac, rng)
+            {
                 match coplanar_with(&found, &plane, p.fit.taken(), &cells, t) {
                     Some(j) => {
                         for &c in p.fit.taken() {

@@ -9,7 +9,7 @@ use crate::fixtures::{Scene, SceneCloud, Surface};
 use crate::ransac_planes::{RansacConfig, SegmentedPlane, Threshold};
 use crate::segmentation::{Proposal, Segmentation, SegmentationConfig};
 
-/// The cell-grid design's parameters (the default design is sequential).
+/// The cell-grid design's parameters.
 fn cells() -> SegmentationConfig {
     SegmentationConfig {
         proposal: Proposal::Cells,
@@ -170,5 +170,38 @@ fn empty_and_tiny_input_give_no_plane_and_no_panic() {
             )
             .len();
         assert_eq!(planes, 0, "{w}x{h}");
+    }
+}
+
+/// Brute force over axis lengths and cell sides: every sample cell is in
+/// exactly one cell, the cells are runs of at most `k` sample cells in
+/// order, and the grouping is its own mirror image.
+#[test]
+fn cells_group_sample_cells_from_both_ends_as_their_own_mirror_image() {
+    use super::grid::CellAxis;
+    for n in 0..40usize {
+        for k in 1..6usize {
+            let mut axis = CellAxis::default();
+            axis.build(n, k);
+            let cells = axis.len();
+            assert_eq!(axis.of_sample.len(), n);
+            assert_eq!(axis.start.last().copied(), Some(n as u32));
+            for c in 0..cells {
+                let run = axis.samples(c);
+                assert!(!run.is_empty() && run.len() <= k, "n {n} k {k} cell {c}");
+                assert!(run.clone().all(|j| axis.of_sample[j] as usize == c));
+            }
+            for j in 0..n {
+                let mirrored = axis.of_sample[n - 1 - j] as usize;
+                assert_eq!(
+                    mirrored,
+                    cells - 1 - axis.of_sample[j] as usize,
+                    "n {n} k {k}"
+                );
+            }
+            if n % (2 * k) == 0 {
+                assert!((0..n).all(|j| axis.of_sample[j] as usize == j / k));
+            }
+        }
     }
 }
