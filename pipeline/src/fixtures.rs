@@ -302,8 +302,11 @@ impl SceneCloud {
     }
 
     /// Moves `count` random measured pixels 40-60 % of the way towards the
-    /// camera (flying pixels floating in mid-air); returns their indices,
-    /// sorted.
+    /// camera (flying pixels floating in mid-air), each at least 5 pixels
+    /// from the others in a row or a column; returns their indices,
+    /// sorted. Fewer when the frame has no room for `count` of them: the
+    /// draws stop after [`FLYING_DRAWS_PER_PIXEL`] per pixel asked without
+    /// finding a free spot.
     pub fn inject_flying_pixels(&mut self, count: usize, seed: u64) -> Vec<usize> {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let measured: Vec<usize> = (0..self.points.len())
@@ -313,7 +316,9 @@ impl SceneCloud {
         if measured.is_empty() {
             return chosen;
         }
-        while chosen.len() < count.min(measured.len()) {
+        let wanted = count.min(measured.len());
+        let mut misses = 0;
+        while chosen.len() < wanted && misses < FLYING_DRAWS_PER_PIXEL * wanted {
             let i = measured[rng.random_range(0..measured.len())];
             let (u, v) = (i % self.width, i / self.width);
             // Keep injected pixels apart so each one is isolated.
@@ -321,6 +326,7 @@ impl SceneCloud {
                 let (uj, vj) = (j % self.width, j / self.width);
                 uj.abs_diff(u) <= 4 && vj.abs_diff(v) <= 4
             }) {
+                misses += 1;
                 continue;
             }
             let s = 1.0 - rng.random_range(0.4..0.6);
@@ -334,6 +340,10 @@ impl SceneCloud {
         chosen
     }
 }
+
+/// Draws that may miss (land next to an injected pixel) per flying pixel
+/// asked, before [`SceneCloud::inject_flying_pixels`] gives up.
+pub const FLYING_DRAWS_PER_PIXEL: usize = 1000;
 
 /// A standard normal sample (Box-Muller), to keep `rand_distr` a
 /// dev-dependency.
@@ -354,6 +364,24 @@ mod tests {
         let m = scene.mount().up_vector().unwrap();
         for k in 0..3 {
             assert!((up[k] - m[k]).abs() < 1e-12, "{up:?} vs {m:?}");
+        }
+    }
+
+    /// A 10 x 10 frame has room for 4 flying pixels 5 apart, not 40: the
+    /// injection ends with at most 4, each isolated, instead of drawing
+    /// for ever.
+    #[test]
+    fn flying_pixels_stop_when_the_frame_has_no_room() {
+        let scene = Scene::wall_facing(2.0);
+        let mut cloud = SceneCloud::render_with_intrinsics(&scene, 10, 10, 8.0, 0.0, 1);
+        assert!(cloud.points.iter().all(|p| p.is_valid()));
+        let chosen = cloud.inject_flying_pixels(40, 3);
+        assert!((1..=4).contains(&chosen.len()), "{chosen:?}");
+        for (k, &a) in chosen.iter().enumerate() {
+            for &b in &chosen[k + 1..] {
+                let (du, dv) = ((a % 10).abs_diff(b % 10), (a / 10).abs_diff(b / 10));
+                assert!(du > 4 || dv > 4, "{a} and {b}");
+            }
         }
     }
 
