@@ -305,8 +305,8 @@ impl SceneCloud {
     /// camera (flying pixels floating in mid-air), each at least 5 pixels
     /// from the others in a row or a column; returns their indices,
     /// sorted. Fewer when the frame has no room for `count` of them: the
-    /// draws stop after [`FLYING_DRAWS_PER_PIXEL`] per pixel asked without
-    /// finding a free spot.
+    /// draws stop after [`FLYING_DRAWS_IN_A_ROW`] in a row that found no
+    /// free spot.
     pub fn inject_flying_pixels(&mut self, count: usize, seed: u64) -> Vec<usize> {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let measured: Vec<usize> = (0..self.points.len())
@@ -318,7 +318,7 @@ impl SceneCloud {
         }
         let wanted = count.min(measured.len());
         let mut misses = 0;
-        while chosen.len() < wanted && misses < FLYING_DRAWS_PER_PIXEL * wanted {
+        while chosen.len() < wanted && misses < FLYING_DRAWS_IN_A_ROW {
             let i = measured[rng.random_range(0..measured.len())];
             let (u, v) = (i % self.width, i / self.width);
             // Keep injected pixels apart so each one is isolated.
@@ -329,6 +329,7 @@ impl SceneCloud {
                 misses += 1;
                 continue;
             }
+            misses = 0;
             let s = 1.0 - rng.random_range(0.4..0.6);
             let p = &mut self.points[i];
             p.x_m *= s;
@@ -341,9 +342,9 @@ impl SceneCloud {
     }
 }
 
-/// Draws that may miss (land next to an injected pixel) per flying pixel
-/// asked, before [`SceneCloud::inject_flying_pixels`] gives up.
-pub const FLYING_DRAWS_PER_PIXEL: usize = 1000;
+/// Draws in a row that may miss (land next to an injected pixel) before
+/// [`SceneCloud::inject_flying_pixels`] gives up.
+pub const FLYING_DRAWS_IN_A_ROW: usize = 10_000;
 
 /// A standard normal sample (Box-Muller), to keep `rand_distr` a
 /// dev-dependency.

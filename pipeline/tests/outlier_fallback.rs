@@ -4,7 +4,7 @@
 //! frames and ramp16 the verdicts differ on 0.25-1.0 % of the measured
 //! pixels (bound 2 %: the borders of holes keep a few more points) and the
 //! estimator's slopes move by at most 0.09 degrees (bound 0.15; every
-//! method, seeds 0-3), less than their spread over seeds (0.3 on
+//! method, seeds 0-3), less than their spread over seeds (0.43 on
 //! stairs-front, `tests/mirror_invariance.rs`).
 //! Skipped with a note when the shared data is absent (the ramp16
 //! recording is bundled).

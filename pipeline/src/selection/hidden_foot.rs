@@ -24,7 +24,10 @@
 //! than [`MAX_FOOT_TURN_DEG`] from forward: it descends from its near
 //! edge) would meet the ground beyond itself, and its near edge, the one
 //! the robot reaches first, is in the air: a bump on a bed's cover whose
-//! continuation runs under the bed's top is hidden, but no road.
+//! continuation runs under the bed's top is hidden, but no road. The rule
+//! is for surfaces tilted less than [`FOOT_TURN_MAX_TILT_DEG`]: the uphill
+//! direction of a wall is the noise of its normal (a riser at 90.1 degrees
+//! "rises" backwards), so walls keep the test of their continuation alone.
 
 use nalgebra::Vector3;
 
@@ -46,6 +49,9 @@ const MAX_MARCH_M: f64 = 3.0;
 /// either side) for its foot to be looked for: a ramp ahead or to the
 /// side, not one falling away.
 pub const MAX_FOOT_TURN_DEG: f64 = 120.0;
+/// [`MAX_FOOT_TURN_DEG`] applies to surfaces tilted less than this,
+/// degrees (the uphill direction of a steeper one is its normal's noise).
+pub const FOOT_TURN_MAX_TILT_DEG: f64 = 80.0;
 
 /// True when the foot of `surface` (whose inliers are `inliers`, pixel
 /// indices of `cloud`) is hidden behind something nearer, never seen past.
@@ -64,10 +70,13 @@ pub fn foot_is_hidden(
         // Nearly level: its continuation never reaches the ground nearby.
         return false;
     }
-    let uphill = (fall - frame.up * rise_per_m).normalize();
-    if uphill.dot(&frame.forward) < MAX_FOOT_TURN_DEG.to_radians().cos() {
-        // Falling away from the robot: its foot is beyond it.
-        return false;
+    // `rise_per_m` is the sine of the surface's tilt.
+    if rise_per_m < FOOT_TURN_MAX_TILT_DEG.to_radians().sin() {
+        let uphill = (fall - frame.up * rise_per_m).normalize();
+        if uphill.dot(&frame.forward) < MAX_FOOT_TURN_DEG.to_radians().cos() {
+            // Falling away from the robot: its foot is beyond it.
+            return false;
+        }
     }
     let mut counts = Counts::default();
     for foot in lowest_per_strip(cloud, inliers, frame, &level)

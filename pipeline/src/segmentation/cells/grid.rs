@@ -82,7 +82,11 @@ impl SumsPlane {
 /// both ends towards the middle, `ceil(floor(n / 2) / k)` cells on each
 /// side and, for an odd number `n` of sample cells, the middle one a cell
 /// of its own. With `n` a multiple of `2 k` (128 sample columns of a
-/// Kinect v2 frame in cells of 2): cell `j / k`, as from one end.
+/// Kinect v2 frame in cells of 2): cell `j / k`, as from one end. Else the
+/// cells next to the middle are smaller (the 106 sample rows of a Kinect
+/// v2 frame: 53 a side, so the two middle cell rows hold one sample row
+/// each), and [`CellGrid::load`] asks them for as many measured points as
+/// a whole cell, so they are planar less readily.
 #[derive(Debug, Default, Clone)]
 pub(super) struct CellAxis {
     /// Per sample cell: its cell.
