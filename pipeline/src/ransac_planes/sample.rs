@@ -1,6 +1,7 @@
 //! The sample grid: every `sample_stride_px`-th pixel in both directions
-//! (counted from the nearer edge, `sample_axis.rs`), with its coarse normal; the free points (not yet taken by a plane) as
-//! [`Points`], and per coarse cell its free point and its original point.
+//! (counted from the nearer edge, `sample_axis.rs`), with its coarse
+//! normal; the free points (not yet taken by a plane) as [`Points`], and
+//! per coarse cell its free point and its original point.
 
 use nalgebra::Vector3;
 

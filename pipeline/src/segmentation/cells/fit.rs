@@ -54,9 +54,10 @@ pub(super) struct FitTarget {
 }
 
 impl RegionFit {
-    /// Fits the free sample points of `region` (cells of `grid`) and labels the plane's
-    /// sample cells `target.label`; `None` (and no label) when no plane has
-    /// 3 inliers or its surface holds fewer than `target.min_cells` cells.
+    /// Fits the free sample points of `region` (cells of `grid`) and labels
+    /// the plane's sample cells `target.label`; `None` (and no label) when
+    /// no plane has 3 inliers or its surface holds fewer than
+    /// `target.min_cells` cells.
     pub fn fit(
         &mut self,
         cells: &mut SampleCells<'_>,
