@@ -20,6 +20,7 @@ use serde::{Deserialize, Serialize};
 use crate::cloud::CloudView;
 use crate::plane_fit::{fit_tls, Moments, Plane};
 use crate::ransac_planes::{RansacConfig, SegmentedPlane, Threshold};
+use crate::segmentation::Proposal;
 
 /// What RANSAC scores its hypotheses on (`ransac.scoring`).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -68,7 +69,7 @@ impl EveryPointRansac {
         self.load_free_points(cloud, keep, Threshold::of(config));
         let total = self.pixels.len();
         let min_points = config.min_plane_points.max(3);
-        while self.planes.len() < config.max_planes
+        while self.planes.len() < config.plane_cap(Proposal::Sequential.max_planes())
             && self.pixels.len() >= min_points
             && (self.pixels.len() as f64) >= config.min_remaining_fraction * total as f64
         {
@@ -289,7 +290,7 @@ mod tests {
         let view = cloud.view();
         let keep: Vec<bool> = cloud.points.iter().map(|p| p.is_valid()).collect();
         let config = RansacConfig {
-            max_planes: 1,
+            max_planes: Some(1),
             min_plane_points: 10,
             ..RansacConfig::default()
         };
@@ -302,7 +303,7 @@ mod tests {
             &view,
             &keep,
             &RansacConfig {
-                max_planes: 0,
+                max_planes: Some(0),
                 ..config.clone()
             },
             &mut rng,

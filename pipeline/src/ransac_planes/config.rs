@@ -40,8 +40,12 @@ pub struct RansacConfig {
     /// Stop when fewer than this fraction of the sample points is free
     /// (neither in a plane nor set aside by a failure).
     pub min_remaining_fraction: f64,
-    /// Stop after this many planes (at most 65,535).
-    pub max_planes: usize,
+    /// Stop after this many planes (at most 65,535). Unset, the proposal's
+    /// own cap ([`crate::segmentation::Proposal::max_planes`]: 16 for the
+    /// cells, which propose the largest regions first; 24 for the
+    /// sequential extraction, which does not find planes largest first).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_planes: Option<usize>,
     /// Score on the sample grid (ours, this module) or on every point (the
     /// paper, `literal/every_point_ransac.rs`).
     pub scoring: crate::literal::RansacScoring,
@@ -58,7 +62,7 @@ impl Default for RansacConfig {
             normal_threshold_deg: 30.0,
             min_plane_points: 800,
             min_remaining_fraction: 0.03,
-            max_planes: 24,
+            max_planes: None,
             scoring: crate::literal::RansacScoring::SampleGrid,
         }
     }
@@ -80,12 +84,21 @@ impl RansacConfig {
         angle("normal_threshold_deg", self.normal_threshold_deg)?;
         at_least("min_plane_points", self.min_plane_points, 3)?;
         fraction("min_remaining_fraction", self.min_remaining_fraction)?;
-        at_least("max_planes", self.max_planes, 1)?;
+        let Some(max_planes) = self.max_planes else {
+            return Ok(());
+        };
+        at_least("max_planes", max_planes, 1)?;
         check(
-            self.max_planes <= MAX_PLANES,
+            max_planes <= MAX_PLANES,
             "max_planes",
-            self.max_planes,
+            max_planes,
             "must be at most 65535",
         )
+    }
+
+    /// The plane cap: `max_planes`, else `unset` (the proposal's), at most
+    /// [`MAX_PLANES`].
+    pub fn plane_cap(&self, unset: usize) -> usize {
+        self.max_planes.unwrap_or(unset).min(MAX_PLANES)
     }
 }

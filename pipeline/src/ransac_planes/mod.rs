@@ -71,6 +71,7 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::cloud::CloudView;
 use crate::plane_fit::{fit_tls, MomentSums, Moments, Plane};
+use crate::segmentation::Proposal;
 
 mod config;
 mod hypotheses;
@@ -215,7 +216,8 @@ impl PlaneSegmenter {
         let cos_gate = normal_gate(config);
         self.load_sample(cloud, keep, config, cos_gate);
         let total = self.sample.points.len();
-        let found = self.extract_planes(config, (cos_gate.is_some(), total), rng, Vec::new());
+        let cap = config.plane_cap(Proposal::Sequential.max_planes());
+        let found = self.extract_planes(config, (cos_gate.is_some(), total, cap), rng, Vec::new());
         self.finish(cloud, keep, config, found)
     }
 
@@ -247,7 +249,7 @@ impl PlaneSegmenter {
             labels: &mut self.cell_plane,
         };
         let mut found = proposal.propose(cloud, keep, cells, config, rng);
-        found.truncate(config.max_planes.min(MAX_PLANES));
+        found.truncate(config.plane_cap(Proposal::Cells.max_planes()));
         for label in &mut self.cell_plane {
             if *label as usize >= found.len() {
                 *label = NO_PLANE;
@@ -261,7 +263,8 @@ impl PlaneSegmenter {
         );
         self.sample.remove_cells(&self.region);
         self.drop_points_on(&found);
-        let found = self.extract_planes(config, (cos_gate.is_some(), total), rng, found);
+        let cap = config.plane_cap(Proposal::Cells.max_planes());
+        let found = self.extract_planes(config, (cos_gate.is_some(), total, cap), rng, found);
         self.finish(cloud, keep, config, found)
     }
 
@@ -291,11 +294,12 @@ impl PlaneSegmenter {
     /// The extraction loop on the free sample points: planes one after
     /// another (after those `found` already), each the largest connected
     /// region of the best hypothesis's inliers, until fewer than
-    /// `min_remaining_fraction` of the `total` sample points are free.
+    /// `min_remaining_fraction` of the `total` sample points are free or
+    /// `cap` planes are found.
     fn extract_planes(
         &mut self,
         config: &RansacConfig,
-        (gated, total): (bool, usize),
+        (gated, total, cap): (bool, usize, usize),
         rng: &mut ChaCha8Rng,
         mut found: Vec<Plane>,
     ) -> Vec<Plane> {
@@ -303,7 +307,7 @@ impl PlaneSegmenter {
         let s2 = (self.sample.stride as f64).powi(2);
         let min_cells = ((config.min_plane_points as f64 / s2).ceil() as usize).max(3);
         let mut failures = 0;
-        while found.len() < config.max_planes.min(MAX_PLANES)
+        while found.len() < cap
             && self.sample.points.len() >= 3
             && (self.sample.points.len() as f64) >= config.min_remaining_fraction * total as f64
         {

@@ -21,6 +21,21 @@ pub enum Proposal {
     Sequential,
 }
 
+impl Proposal {
+    /// The plane cap when `ransac.max_planes` is unset. The cells fit their
+    /// regions largest first, and 16 planes hold every surface the tests
+    /// rely on; the sequential extraction does not find planes largest
+    /// first (a 26-row riser strip is hard to hit on the sample grid) and
+    /// needs 24 for the stair risers and the office's wall at every seed
+    /// (pipeline README, "Mirror images give the same slope").
+    pub fn max_planes(self) -> usize {
+        match self {
+            Self::Cells => 16,
+            Self::Sequential => 24,
+        }
+    }
+}
+
 /// Plane segmentation: the proposal design and the cell grid's parameters.
 /// `ransac.scoring = "every-point"` (the paper as written) ignores it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

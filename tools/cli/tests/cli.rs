@@ -248,7 +248,7 @@ fn the_estimator_prints_the_configuration_in_effect() {
     expected.health.interval_s = 0.0;
     expected.estimator.seed = 7;
     expected.estimator.method = slope_ipc_types::SlopeMethod::Tls;
-    expected.estimator.ransac.max_planes = 12;
+    expected.estimator.ransac.max_planes = Some(12);
     assert_eq!(printed, expected);
     assert!(
         stdout.contains("[estimator.normals]") && stdout.contains("[capture]"),

@@ -137,7 +137,7 @@ impl PlaneProposal for ConfiguredCells<'_> {
         let min_cells = ((ransac.min_plane_points as f64 / s2).ceil() as usize).max(3);
         let mut found = Vec::new();
         for &r in &p.order {
-            if found.len() >= ransac.max_planes.min(crate::ransac_planes::MAX_PLANES) {
+            if found.len() >= ransac.plane_cap(crate::segmentation::Proposal::Cells.max_planes()) {
                 break;
             }
             let region = &regions[r];

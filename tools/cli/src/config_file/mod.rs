@@ -17,7 +17,7 @@
 //! [estimator]                # slope_pipeline::EstimatorConfig (slope-estimator)
 //! method = "paper"
 //! [estimator.ransac]
-//! max_planes = 24
+//! max_planes = 16
 //!
 //! [ros2]                     # the ROS 2 node (slope-ros2)
 //! namespace = "/robot1"

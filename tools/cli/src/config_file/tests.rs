@@ -36,7 +36,7 @@ fn every_section_is_read() {
     assert!(!file.capture.color);
     assert_eq!(file.capture.max_depth_m, 4.5);
     assert_eq!(file.estimator.method, slope_ipc_types::SlopeMethod::Tls);
-    assert_eq!(file.estimator.ransac.max_planes, 12);
+    assert_eq!(file.estimator.ransac.max_planes, Some(12));
     assert_eq!(
         SlopeFile::from_toml_str("").expect("empty"),
         SlopeFile::default()
