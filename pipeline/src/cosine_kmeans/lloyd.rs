@@ -26,21 +26,15 @@ impl CosineKmeans {
         let n = self.unit.len();
         let mut iterations = 0;
         let mut counts = vec![0usize; centres.len()];
+        self.clear_sums(centres.len());
         for _ in 0..max_iterations.max(1) {
             iterations += 1;
-            let mut changed = 0usize;
             self.assign(centres);
-            for (label, &best) in self.labels.iter_mut().zip(&self.best) {
-                let best = best as usize;
-                changed += usize::from(*label != best);
-                *label = best;
-            }
+            let changed = self.move_labels();
             let mut moved: f64 = 0.0;
-            self.cluster_sums(centres.len());
-            for ((c, count), &(sum, members)) in centres.iter_mut().zip(&mut counts).zip(&self.sums)
-            {
-                *count = members;
-                if let Some(m) = sum.try_normalize(1e-12) {
+            for (j, (c, count)) in centres.iter_mut().zip(&mut counts).enumerate() {
+                *count = self.sums[j].1;
+                if let Some(m) = self.cluster_sum(j).try_normalize(1e-12) {
                     moved = moved.max(cosine_distance(c, &m));
                     *c = m;
                 }

@@ -17,16 +17,19 @@
 //! **How it runs.** The assignment step (each normal to the centre with the
 //! largest dot product) runs on an `f32` structure-of-arrays copy of the
 //! normals, one centre at a time over all normals, which the compiler
-//! vectorises; the update step sums each cluster's members in one pass over
-//! the normals for all clusters (`f32` in 8 lanes over blocks of 256, added
-//! up in `f64`); centres and spreads stay `f64`. Normals of one plane
+//! vectorises. Each cluster's sum is kept in fixed point (`i64` multiples
+//! of `2^-36` of the `f64` unit vectors), exact whatever the order of its
+//! additions, so the update step moves only the normals whose label
+//! changed from one sum to the other (after the first iteration a few
+//! percent of them) instead of summing every cluster afresh, and gets the
+//! same sums; centres and spreads stay `f64`. Normals of one plane
 //! differ from their centres by degrees, dot products by 1e-2 to 1e-4,
 //! against `f32` rounding of 6e-8: a label can change only for a normal
 //! equidistant from two centres to that precision.
 //!
 //! One concern per file: `init.rs` (the initial centres, farthest first),
 //! `lloyd.rs` (the Lloyd iterations and when they have converged),
-//! `assign.rs` (the `f32` assignment step and the one-pass cluster sums),
+//! `assign.rs` (the `f32` assignment step and the fixed-point cluster sums),
 //! `dominant.rs` (the dominant cluster, its spread, and the clusters merged
 //! into it), `config.rs` (the parameters), `tests.rs`.
 
@@ -38,7 +41,6 @@ mod lloyd;
 
 use nalgebra::Vector3;
 
-use assign::LaneSums;
 pub use config::KmeansConfig;
 pub use lloyd::CONVERGED_DEG;
 
@@ -71,10 +73,10 @@ pub struct CosineKmeans {
     uz: Vec<f32>,
     best_dot: Vec<f32>,
     best: Vec<u32>,
-    /// Per cluster, its sum and size, and its lane sums over one block of
-    /// the update step.
-    sums: Vec<(Vector3<f64>, usize)>,
-    lanes: Vec<LaneSums>,
+    /// `unit` in fixed point (`assign.rs`), and per cluster the sum of its
+    /// members in fixed point and their count.
+    fixed: Vec<[i64; 3]>,
+    sums: Vec<([i64; 3], usize)>,
 }
 
 /// Cosine distance of two unit vectors.
@@ -105,7 +107,7 @@ impl CosineKmeans {
         let mut centres = self.farthest_first_centres(k.clamp(1, n))?;
         self.labels.clear();
         self.labels.resize(n, usize::MAX);
-        self.load_f32();
+        self.load_copies();
         let (counts, iterations) = self.lloyd(&mut centres, max_iterations);
         Some(self.keep_dominant(centres, counts, iterations, merge_spread_ratio))
     }
@@ -113,6 +115,7 @@ impl CosineKmeans {
     /// `unit`: the finite, non-zero vectors of `normals`, normalised.
     fn load_units(&mut self, normals: &[Vector3<f64>]) {
         self.unit.clear();
+        self.unit.reserve(normals.len());
         self.unit.extend(
             normals
                 .iter()

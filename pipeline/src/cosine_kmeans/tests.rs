@@ -100,3 +100,41 @@ fn degenerate_inputs() {
     assert_eq!(c.counts, vec![10]);
     assert!((cosine_distance(&Vector3::x(), &Vector3::y()) - 1.0).abs() < 1e-15);
 }
+
+#[test]
+fn each_centre_is_the_mean_direction_of_its_members_summed_afresh() {
+    // The sums are moved normal by normal as labels change; summed afresh
+    // from the final labels they give the same centres. Three populations
+    // that k-means cuts and reassigns over many iterations, k from 1 to 5.
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    let dirs = [
+        Vector3::new(0.0, -1.0, -0.2).normalize(),
+        Vector3::new(0.1, -0.3, -1.0).normalize(),
+        Vector3::new(0.8, -0.5, -0.3).normalize(),
+    ];
+    let mut normals: Vec<Vector3<f64>> = Vec::new();
+    for (d, (n, spread)) in dirs.iter().zip([(2500, 4.0), (900, 6.0), (150, 10.0)]) {
+        normals.extend((0..n).map(|_| jitter(&mut rng, *d, spread)));
+    }
+    let mut km = CosineKmeans::new();
+    for k in 1..=5 {
+        let c = km.cluster(&normals, k, 100, 0.0).unwrap();
+        assert!(
+            c.iterations > 1 || k == 1,
+            "k {k}: {} iterations",
+            c.iterations
+        );
+        for (j, centre) in c.centres.iter().enumerate() {
+            let members: Vec<Vector3<f64>> = km.members(j).copied().collect();
+            assert_eq!(members.len(), c.counts[j], "k {k} cluster {j}");
+            let Some(mean) = members.iter().sum::<Vector3<f64>>().try_normalize(1e-12) else {
+                continue; // an empty cluster keeps its last centre
+            };
+            let off = angle_between_deg(centre, &mean);
+            assert!(
+                off < 1e-7,
+                "k {k} cluster {j}: centre {off} degrees off its members' mean"
+            );
+        }
+    }
+}
