@@ -75,7 +75,9 @@ impl NoiseModel {
         let angle_term = theta * theta / ((FRAC_PI_2 - theta) * (FRAC_PI_2 - theta));
         let z = z_m.max(0.0);
         let mm = match self {
-            Self::Kinect2 => 1.5 - 0.5 * z + 0.3 * z * z + 0.1 * z.powf(1.5) * angle_term,
+            // z^1.5 as z sqrt(z): the same to an ulp, a tenth of powf's
+            // instructions (plane quality takes it for every sampled point).
+            Self::Kinect2 => 1.5 - 0.5 * z + 0.3 * z * z + 0.1 * z * z.sqrt() * angle_term,
             Self::Kinect1 => 1.2 + 1.9 * (z - 0.4).powi(2) + 0.1 / z.max(0.1).sqrt() * angle_term,
         };
         mm * 1e-3

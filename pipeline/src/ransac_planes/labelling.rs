@@ -221,16 +221,25 @@ impl RunGrid<'_> {
             t: self.t,
         };
         for v in b * LABEL_BAND_ROWS..((b + 1) * LABEL_BAND_ROWS).min(h) {
-            let row = self.rows.of_pixel[v] as usize * cw;
-            for column in 0..cw {
-                let (candidates, n) = &self.candidates[row + column];
-                if *n == 0 {
-                    continue;
+            let cells = &self.candidates[self.rows.of_pixel[v] as usize * cw..][..cw];
+            let mut column = 0;
+            while column < cw {
+                let (candidates, n) = &cells[column];
+                let candidates = &candidates[..*n as usize];
+                // Sample cells in a row with the same one candidate are
+                // one run (the same additions in the same order).
+                let mut end = column + 1;
+                if let &[k] = candidates {
+                    while end < cw && cells[end].1 == 1 && cells[end].0[0] == k {
+                        end += 1;
+                    }
                 }
                 let first = v * w + runs[column] as usize;
-                let run = first..v * w + runs[column + 1] as usize;
+                let run = first..v * w + runs[end] as usize;
+                column = end;
                 let (keep, points) = (&self.keep[run.clone()], &self.cloud.points[run]);
-                match &candidates[..*n as usize] {
+                match candidates {
+                    [] => {}
                     &[k] => labeller.one(k as usize, first, keep, points),
                     several => labeller.nearest(several, first, keep, points),
                 }
