@@ -7,7 +7,7 @@
 use nalgebra::Vector3;
 use slope_ipc_types::CloudPoint;
 
-use super::sample::cell_neighbourhood;
+use super::sample::{cell_neighbourhood, neighbourhood_span};
 use super::sample_axis::SampleAxis;
 use super::{PlaneSegmenter, SegmentedPlane, Threshold, NO_PLANE};
 use crate::cloud::{is_measured, to_vec3, CloudView};
@@ -109,20 +109,26 @@ impl PlaneSegmenter {
             .extend(found.iter().map(|p| MomentSums::about(-p.d * p.normal)));
     }
 
-    /// Per coarse cell, the distinct planes of the 3x3 cells around it.
+    /// Per coarse cell, the distinct planes of the 3x3 cells around it, in
+    /// the order of [`cell_neighbourhood`] (row by row).
     fn fill_cell_candidates(&mut self) {
         let (cw, ch) = (self.sample.coarse_w, self.sample.coarse_h);
         self.cell_candidates.clear();
-        for c in 0..cw * ch {
-            let mut set = ([NO_PLANE; 9], 0u8);
-            for q in cell_neighbourhood(c, cw, ch) {
-                let k = self.cell_plane[q];
-                if k != NO_PLANE && !set.0[..set.1 as usize].contains(&k) {
-                    set.0[set.1 as usize] = k;
-                    set.1 += 1;
+        self.cell_candidates.reserve(cw * ch);
+        for cv in 0..ch {
+            for cu in 0..cw {
+                let (rows, columns) = neighbourhood_span(cu, cv, cw, ch);
+                let mut set = ([NO_PLANE; 9], 0u8);
+                for r in rows {
+                    for &k in &self.cell_plane[r * cw..][columns.clone()] {
+                        if k != NO_PLANE && !set.0[..set.1 as usize].contains(&k) {
+                            set.0[set.1 as usize] = k;
+                            set.1 += 1;
+                        }
+                    }
                 }
+                self.cell_candidates.push(set);
             }
-            self.cell_candidates.push(set);
         }
     }
 

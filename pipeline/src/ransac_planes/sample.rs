@@ -191,7 +191,21 @@ pub(super) fn central_difference_normal(
 
 /// Cell `c` and its 8-connected neighbours on a `cw x ch` grid.
 pub(super) fn cell_neighbourhood(c: usize, cw: usize, ch: usize) -> impl Iterator<Item = usize> {
-    let (cu, cv) = (c % cw, c / cw);
-    (cv.saturating_sub(1)..(cv + 2).min(ch))
-        .flat_map(move |r| (cu.saturating_sub(1)..(cu + 2).min(cw)).map(move |q| r * cw + q))
+    let (rows, columns) = neighbourhood_span(c % cw, c / cw, cw, ch);
+    rows.flat_map(move |r| columns.clone().map(move |q| r * cw + q))
+}
+
+/// The rows and the columns of the (up to) 3x3 sample cells around cell
+/// `(cu, cv)` of a `cw` x `ch` grid: [`cell_neighbourhood`] is their
+/// cells, row by row.
+pub(super) fn neighbourhood_span(
+    cu: usize,
+    cv: usize,
+    cw: usize,
+    ch: usize,
+) -> (std::ops::Range<usize>, std::ops::Range<usize>) {
+    (
+        cv.saturating_sub(1)..(cv + 2).min(ch),
+        cu.saturating_sub(1)..(cu + 2).min(cw),
+    )
 }
