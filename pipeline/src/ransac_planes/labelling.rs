@@ -184,6 +184,8 @@ pub(super) const LABEL_BAND_ROWS: usize = 32;
 pub(super) struct LabelBand {
     inliers: Vec<Vec<u32>>,
     sums: Vec<MomentSums>,
+    /// A run's inlier flags (an image row long).
+    flags: Vec<bool>,
 }
 
 impl LabelBand {
@@ -220,9 +222,11 @@ impl RunGrid<'_> {
         let runs = &self.columns.run_start;
         // Each row is walked a sample cell's columns at a time: pixels
         // of one run share their candidate planes (none: skipped whole).
+        band.flags.resize(w, false);
         let mut labeller = RunLabeller {
             inliers: &mut band.inliers,
             sums: &mut band.sums,
+            flags: &mut band.flags,
             found: self.found,
             t: self.t,
         };
@@ -259,25 +263,38 @@ impl RunGrid<'_> {
 struct RunLabeller<'a> {
     inliers: &'a mut [Vec<u32>],
     sums: &'a mut [MomentSums],
+    /// Per pixel of a run: an inlier of its one candidate plane.
+    flags: &'a mut [bool],
     found: &'a [Plane],
     t: Threshold,
 }
 
 impl RunLabeller<'_> {
-    /// One candidate (most runs): its sums and inliers held across the
-    /// run, the same additions in the same order as [`Self::nearest`].
+    /// One candidate (most runs): the run's inliers flagged first, in a
+    /// loop without branches (which the compiler vectorises), then pushed
+    /// and summed; the same inliers and the same additions in the same
+    /// order as [`Self::nearest`]. A pixel without a reading is no inlier:
+    /// a coordinate that is not finite makes the distance NaN or infinite
+    /// (and the threshold too when it is z, hence its own test).
     #[inline]
     fn one(&mut self, k: usize, first: usize, keep: &[bool], points: &[CloudPoint]) {
         let (plane, inliers) = (&self.found[k], &mut self.inliers[k]);
-        let mut sums = self.sums[k];
-        for (i, (&kept, point)) in (first..).zip(keep.iter().zip(points)) {
-            if !kept || !is_measured(point) {
-                continue;
-            }
+        let flags = &mut self.flags[..points.len()];
+        let t = self.t;
+        for (flag, (&kept, point)) in flags.iter_mut().zip(keep.iter().zip(points)) {
             let p = to_vec3(point);
-            if plane.signed_distance(&p).abs() <= self.t.at(&p) {
+            let near = plane.signed_distance(&p).abs() <= t.at(&p);
+            *flag = kept & (p.z.abs() < f64::INFINITY) & near;
+        }
+        let mut sums = self.sums[k];
+        for (i, (&flag, point)) in (first..).zip(flags.iter().zip(points)) {
+            if flag {
                 inliers.push(i as u32);
-                sums.add(p.x, p.y, p.z);
+                sums.add(
+                    f64::from(point.x_m),
+                    f64::from(point.y_m),
+                    f64::from(point.z_m),
+                );
             }
         }
         self.sums[k] = sums;

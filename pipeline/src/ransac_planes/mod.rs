@@ -456,10 +456,18 @@ impl Threshold {
         }
     }
 
-    /// The inlier distance at point `p`, metres.
+    /// The inlier distance at point `p`, metres. (`base_m.max(z_term)`,
+    /// written as the comparison that is one instruction, also two lanes
+    /// at a time: the same value, as the base is a number; a NaN z gives
+    /// the base.)
     #[inline]
     pub fn at(&self, p: &Vector3<f64>) -> f64 {
-        self.base_m.max(self.per_m2 * p.z * p.z)
+        let z_term = self.per_m2 * p.z * p.z;
+        if z_term > self.base_m {
+            z_term
+        } else {
+            self.base_m
+        }
     }
 }
 
