@@ -352,6 +352,42 @@ fn a_complete_disc_sums_its_distances_in_f32_in_a_fixed_order() {
     assert!(holed > 500, "{holed} pixels with a complete disc, holed");
 }
 
+/// A block's present sums are each pixel's alone, bit for bit, with every
+/// number of missing terms, at every place and length of a block.
+#[test]
+fn a_blocks_present_means_are_each_pixels_own() {
+    use super::grid_disc::{present_mean, PresentBlock};
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+    let mut means = 0;
+    for trial in 0..300 {
+        let missing = rng.random_range(0.0..1.0);
+        let pairs: Vec<f32> = (0..2000)
+            .map(|_| {
+                if rng.random_bool(missing) {
+                    f32::NAN
+                } else {
+                    rng.random_range(0.001f32..0.3)
+                }
+            })
+            .collect();
+        let starts: [usize; 20] = std::array::from_fn(|_| rng.random_range(0..1900));
+        let (u0, len) = (rng.random_range(0..60), rng.random_range(1..=32));
+        let block = PresentBlock::of(&pairs, &starts, u0, len);
+        for j in 0..len {
+            let (ours, own) = (block.mean(j), present_mean(&pairs, &starts, u0 + j));
+            assert_eq!(
+                ours.map(f32::to_bits),
+                own.map(f32::to_bits),
+                "trial {trial} pixel {j}"
+            );
+            means += usize::from(own.is_some());
+        }
+    }
+    // Both outcomes occur: a mean, and too few present.
+    assert!((500..4000).contains(&means), "{means} means");
+}
+
 #[test]
 fn smallest20_selection_matches_a_sort() {
     use rand::{Rng, SeedableRng};
