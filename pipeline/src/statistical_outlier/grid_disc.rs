@@ -187,31 +187,31 @@ fn disc_band(padded: Padded<'_>, v0: usize, stats: &mut [f32], present: bool, s:
             .zip(s.row_sum[..w].chunks(BLOCK).zip(measured.chunks(BLOCK)));
         let mut starts = None;
         for (b, (stats, (sums, block_z))) in blocks.enumerate() {
-            let mut missing = 0;
+            let mut missing = false;
             for ((stat, &sum), &z) in stats.iter_mut().zip(sums).zip(block_z) {
                 *stat = sum / M as f32;
-                missing += usize::from(sum.is_nan() & z.is_finite());
+                missing |= sum.is_nan() & z.is_finite();
             }
-            if missing == 0 {
+            if !missing {
                 continue;
             }
             let starts = starts.get_or_insert_with(|| disc_starts(row, ew));
+            const { assert!(BLOCK <= 32) };
+            let (needing, n) = needing_pixels(stats, block_z);
             // Many such pixels in a block: their present sums for the
             // whole block at once (the same sums, bit for bit).
             let u0 = b * BLOCK;
-            let block = (present && missing >= PRESENT_BLOCK_MIN)
+            let block = (present && n >= PRESENT_BLOCK_MIN)
                 .then(|| PresentBlock::of(&s.pairs, starts, u0, stats.len()));
-            for (j, (stat, z)) in stats.iter_mut().zip(block_z).enumerate() {
-                if stat.is_nan() && z.is_finite() {
-                    let near = match &block {
-                        Some(block) => block.mean(j),
-                        None => present
-                            .then(|| present_mean(&s.pairs, starts, u0 + j))
-                            .flatten(),
-                    };
-                    *stat =
-                        near.unwrap_or_else(|| fallback_disc([xs, ys, zs], centre + u0 + j, pw));
-                }
+            for &j in &needing[..n] {
+                let j = usize::from(j);
+                let near = match &block {
+                    Some(block) => block.mean(j),
+                    None => present
+                        .then(|| present_mean(&s.pairs, starts, u0 + j))
+                        .flatten(),
+                };
+                stats[j] = near.unwrap_or_else(|| fallback_disc([xs, ys, zs], centre + u0 + j, pw));
             }
         }
     }
@@ -273,11 +273,26 @@ pub(super) fn present_mean(pairs: &[f32], starts: &[usize; 20], u: usize) -> Opt
     (count as usize >= MIN_PRESENT).then(|| sum / count as f32)
 }
 
+/// The pixels of a block (at most 32) with a reading but no complete disc
+/// (a NaN statistic so far), and how many there are.
+#[inline]
+fn needing_pixels(stats: &[f32], block_z: &[f32]) -> ([u8; 32], usize) {
+    let (mut needing, mut n) = ([0u8; 32], 0);
+    for (j, (stat, z)) in stats.iter().zip(block_z).enumerate() {
+        if stat.is_nan() && z.is_finite() {
+            needing[n] = j as u8;
+            n += 1;
+        }
+    }
+    (needing, n)
+}
+
 /// Pixels of a block of 32 without a complete disc from which their present
 /// neighbours' sums are taken for the whole block at once: one pixel's
 /// alone costs about an eighth of the block's (the block's 64 sums do not
-/// fit the registers). Set by callgrind on stairs-front: from 125.3 M
-/// instructions, 2: -0.0 M, 4: -0.8 M, 8: -1.0 M, 12: -0.7 M, 18: -0.0 M.
+/// fit the registers). Set by callgrind, `Estimator::run` on stairs-front
+/// / the office, M instructions: 6: 124.0 / 139.1, 8: 123.9 / 139.1, 12:
+/// 124.2 / 139.2; every pixel alone: 125.3 on stairs-front.
 const PRESENT_BLOCK_MIN: usize = 8;
 
 /// The finite pair distances' sums and counts of the pixels `u0..u0 + len`
