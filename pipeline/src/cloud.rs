@@ -69,6 +69,50 @@ impl<'a> CloudView<'a> {
     }
 }
 
+/// The pixel bounding box of some pixels of an image, inclusive
+/// (`u0..=u1` x `v0..=v1`); empty (`u0 > u1`) before the first.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PixelBox {
+    pub u0: usize,
+    pub v0: usize,
+    pub u1: usize,
+    pub v1: usize,
+}
+
+impl PixelBox {
+    /// The box of no pixel.
+    pub const EMPTY: Self = Self {
+        u0: usize::MAX,
+        v0: usize::MAX,
+        u1: 0,
+        v1: 0,
+    };
+
+    /// True before the first pixel.
+    pub fn is_empty(&self) -> bool {
+        self.u0 > self.u1 || self.v0 > self.v1
+    }
+
+    /// Adds the pixels `u_first..=u_last` of row `v`.
+    #[inline]
+    pub fn add_run(&mut self, v: usize, u_first: usize, u_last: usize) {
+        self.u0 = self.u0.min(u_first);
+        self.u1 = self.u1.max(u_last);
+        self.v0 = self.v0.min(v);
+        self.v1 = self.v1.max(v);
+    }
+
+    /// The box of both boxes' pixels.
+    pub fn union(&self, other: &Self) -> Self {
+        Self {
+            u0: self.u0.min(other.u0),
+            v0: self.v0.min(other.v0),
+            u1: self.u1.max(other.u1),
+            v1: self.v1.max(other.v1),
+        }
+    }
+}
+
 /// True when all three coordinates are finite.
 #[inline]
 pub(crate) fn is_measured(p: &CloudPoint) -> bool {

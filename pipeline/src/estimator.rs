@@ -637,7 +637,7 @@ impl PlaneStages {
         out.clear();
         let (members, support, walked) =
             self.pass_through
-                .filter(cloud, segment.inliers, &config.pass_through);
+                .filter(cloud, segment, &config.pass_through);
         lap("pass_through");
         let found = self.normals.estimate(
             cloud,
@@ -684,18 +684,28 @@ impl PassThroughStage {
     fn filter<'a>(
         &'a mut self,
         cloud: &CloudView<'_>,
-        inliers: &'a [u32],
+        segment: &PlaneSegment<'a>,
         config: &PassThroughConfig,
     ) -> (&'a [u32], &'a [u32], Option<PlaneSupport<'a>>) {
-        let max_points = config.max_points;
-        match config.mode {
-            PassThroughMode::SurfaceUniform => {
+        let (max_points, inliers) = (config.max_points, segment.inliers);
+        match (config.mode, segment.pixel_box) {
+            // The labelling's inliers: their box and centre are known.
+            (PassThroughMode::SurfaceUniform, Some(pixel_box)) => {
+                let (kept, support) = self.surface_uniform.filter_segment(
+                    cloud.points,
+                    inliers,
+                    (pixel_box, segment.centroid),
+                    max_points,
+                );
+                (kept, inliers, support)
+            }
+            (PassThroughMode::SurfaceUniform, None) => {
                 let (kept, walked) = self
                     .surface_uniform
                     .filter_plane(cloud, inliers, max_points);
                 (kept, inliers, walked)
             }
-            PassThroughMode::Depth => {
+            (PassThroughMode::Depth, _) => {
                 let kept = self.depth.filter(cloud.points, inliers, max_points);
                 (kept, kept, None)
             }

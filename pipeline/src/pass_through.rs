@@ -23,9 +23,10 @@
 //!   are, and the normals still take their neighbourhoods from all of the
 //!   plane's points (`NormalEstimator::estimate_with_support`).
 
-use crate::cloud::{is_measured, CloudView};
+use crate::cloud::{is_measured, CloudView, PixelBox};
 use crate::normals::{PlaneSupport, SupportWalk};
 use crate::validate::{at_least, InvalidValue};
+use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use slope_ipc_types::CloudPoint;
 
@@ -118,6 +119,31 @@ impl PassThrough {
         let cut = self.sample(points, max_points, total);
         // `valid` is the members with a point, in their (pixel) order.
         (self.kept(cut), support.finish(&self.valid))
+    }
+
+    /// As [`Self::filter_plane`] for the inliers of a segmented plane
+    /// (`members`, with their bounding box and centre: every one has a
+    /// reading at a depth other than 0 and they are in pixel order, the
+    /// labelling's promise, `SegmentedPlane::pixel_box`): the same kept
+    /// points, and the support from the box without walking the members
+    /// for it.
+    pub fn filter_segment<'a>(
+        &'a mut self,
+        points: &[CloudPoint],
+        members: &'a [u32],
+        (pixel_box, centre): (PixelBox, Vector3<f64>),
+        max_points: usize,
+    ) -> (&'a [u32], Option<PlaneSupport<'a>>) {
+        let mut total = -0.0;
+        for p in members.iter().filter_map(|&i| points.get(i as usize)) {
+            total += footprint(p);
+        }
+        let cut = members.len() > max_points;
+        if cut {
+            surface_sample(points, members, &mut self.kept, max_points, total);
+        }
+        let kept = if cut { &self.kept[..] } else { members };
+        (kept, PlaneSupport::of_segment(members, pixel_box, centre))
     }
 
     /// Collects the members with a reading into `valid`, each passed to
@@ -349,6 +375,59 @@ mod tests {
         let (kept, support) = pt.filter_plane(&view, &members, 3000);
         assert_eq!(kept, expected);
         assert!(support.is_none());
+    }
+
+    /// A segmented plane's pass-through from its box keeps the points the
+    /// walk keeps, and hands the normals the same support pixels and box:
+    /// their normals agree with the walked support's (the centres, the
+    /// tables' origins, differ by rounding).
+    #[test]
+    fn a_segmented_plane_filtered_from_its_box_is_the_walked_plane() {
+        use crate::fixtures::{Scene, SceneCloud};
+        use crate::normals::{NormalEstimator, NormalsConfig};
+        use crate::ransac_planes::{PlaneSegmenter, RansacConfig};
+        use nalgebra::Vector3;
+        use rand::SeedableRng;
+
+        let cloud = SceneCloud::kinect2(&Scene::ramp(16.0), 6);
+        let view = cloud.view();
+        let keep: Vec<bool> = cloud.points.iter().map(|p| p.is_valid()).collect();
+        let planes = PlaneSegmenter::new()
+            .segment(
+                &view,
+                &keep,
+                &RansacConfig::default(),
+                &mut rand_chacha::ChaCha8Rng::seed_from_u64(1),
+            )
+            .to_vec();
+        assert!(planes.len() >= 2);
+        let (mut walked_pt, mut boxed_pt) = (PassThrough::new(), PassThrough::new());
+        let (mut walked_normals, mut boxed_normals) =
+            (NormalEstimator::new(), NormalEstimator::new());
+        let (cfg, origin) = (NormalsConfig::default(), Vector3::zeros());
+        for (plane, cap) in planes.iter().take(2).zip([3000, 1_000_000]) {
+            let (kept, walked) = walked_pt.filter_plane(&view, &plane.inliers, cap);
+            let walked = walked.expect("inliers in pixel order");
+            let pixel_box = plane.pixel_box.expect("labelled");
+            let (boxed_kept, boxed) = boxed_pt.filter_segment(
+                view.points,
+                &plane.inliers,
+                (pixel_box, plane.centroid),
+                cap,
+            );
+            let boxed = boxed.expect("a box");
+            assert_eq!(kept, boxed_kept);
+            assert_eq!(kept.len(), plane.inliers.len().min(cap));
+            assert_eq!(walked.pixels(), boxed.pixels());
+            let (a, a_stats) =
+                walked_normals.estimate_on_plane(&view, kept, &walked, &cfg, &origin);
+            let (b, b_stats) = boxed_normals.estimate_on_plane(&view, kept, &boxed, &cfg, &origin);
+            assert_eq!(a_stats, b_stats);
+            assert!(a_stats.from_window * 10 > kept.len() * 9, "{a_stats:?}");
+            for (a, b) in a.iter().zip(b) {
+                assert!((a - b).norm() < 1e-9, "{a} {b}");
+            }
+        }
     }
 
     #[test]

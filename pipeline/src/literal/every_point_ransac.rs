@@ -128,6 +128,7 @@ impl EveryPointRansac {
         SegmentedPlane {
             plane: fitted,
             inliers,
+            pixel_box: None,
             centroid: moments.mean().unwrap_or_else(Vector3::zeros),
             rms_m,
             moments,

@@ -9,7 +9,7 @@ use nalgebra::Vector3;
 use slope_ipc_types::CloudPoint;
 
 use super::Bounds;
-use crate::cloud::to_vec3;
+use crate::cloud::{to_vec3, PixelBox};
 
 /// A plane's support pixels with their bounding box and centroid.
 ///
@@ -24,6 +24,28 @@ pub struct PlaneSupport<'a> {
 }
 
 impl<'a> PlaneSupport<'a> {
+    /// The support of a segmented plane: its inliers `pixels` (in pixel
+    /// order, each with a reading at a depth other than 0: the labelling's
+    /// promise, [`crate::ransac_planes::SegmentedPlane::pixel_box`]), their
+    /// bounding box and a centre near them (the summed-area tables' origin;
+    /// their mean). `None` for an empty box.
+    pub fn of_segment(
+        pixels: &'a [u32],
+        pixel_box: PixelBox,
+        centre: Vector3<f64>,
+    ) -> Option<Self> {
+        (!pixel_box.is_empty()).then_some(Self {
+            pixels,
+            bounds: Bounds {
+                u0: pixel_box.u0,
+                v0: pixel_box.v0,
+                width: pixel_box.u1 - pixel_box.u0 + 1,
+                height: pixel_box.v1 - pixel_box.v0 + 1,
+            },
+            centre,
+        })
+    }
+
     /// The support's pixels (pixel order, all measured).
     pub fn pixels(&self) -> &'a [u32] {
         self.pixels

@@ -10,7 +10,7 @@ use slope_ipc_types::CloudPoint;
 use super::sample::{cell_neighbourhood, neighbourhood_span};
 use super::sample_axis::SampleAxis;
 use super::{PlaneSegmenter, SegmentedPlane, Threshold, NO_PLANE};
-use crate::cloud::{is_measured, to_vec3, CloudView};
+use crate::cloud::{is_measured, to_vec3, CloudView, PixelBox};
 use crate::plane_fit::{MomentSums, Moments, Plane};
 
 impl PlaneSegmenter {
@@ -100,6 +100,7 @@ impl PlaneSegmenter {
         self.planes.resize_with(found.len(), || SegmentedPlane {
             plane: found[0],
             inliers: Vec::new(),
+            pixel_box: None,
             centroid: Vector3::zeros(),
             rms_m: 0.0,
             moments: Moments::new(),
@@ -166,10 +167,13 @@ impl PlaneSegmenter {
             _ => jobs.for_each(|(b, band)| grid.label_band(b, band)),
         }
         for (k, (plane, sums)) in self.planes.iter_mut().zip(&mut self.sums).enumerate() {
+            let mut pixel_box = PixelBox::EMPTY;
             for band in &self.bands[..bands] {
                 plane.inliers.extend_from_slice(&band.inliers[k]);
                 sums.merge(&band.sums[k]);
+                pixel_box = pixel_box.union(&band.boxes[k]);
             }
+            plane.pixel_box = (!pixel_box.is_empty()).then_some(pixel_box);
         }
     }
 }
@@ -184,6 +188,8 @@ pub(super) const LABEL_BAND_ROWS: usize = 32;
 pub(super) struct LabelBand {
     inliers: Vec<Vec<u32>>,
     sums: Vec<MomentSums>,
+    /// The inliers' pixel bounding boxes.
+    boxes: Vec<PixelBox>,
     /// A run's inlier flags (an image row long).
     flags: Vec<bool>,
 }
@@ -197,6 +203,8 @@ impl LabelBand {
         self.inliers.resize_with(empty.len(), Vec::new);
         self.sums.clear();
         self.sums.extend_from_slice(empty);
+        self.boxes.clear();
+        self.boxes.resize(empty.len(), PixelBox::EMPTY);
     }
 }
 
@@ -226,6 +234,8 @@ impl RunGrid<'_> {
         let mut labeller = RunLabeller {
             inliers: &mut band.inliers,
             sums: &mut band.sums,
+            boxes: &mut band.boxes,
+            width: w,
             flags: &mut band.flags,
             found: self.found,
             t: self.t,
@@ -244,14 +254,14 @@ impl RunGrid<'_> {
                         end += 1;
                     }
                 }
-                let first = v * w + runs[column] as usize;
-                let run = first..v * w + runs[end] as usize;
+                let at = (v, runs[column] as usize);
+                let run = v * w + at.1..v * w + runs[end] as usize;
                 column = end;
                 let (keep, points) = (&self.keep[run.clone()], &self.cloud.points[run]);
                 match candidates {
                     [] => {}
-                    &[k] => labeller.one(k as usize, first, keep, points),
-                    several => labeller.nearest(several, first, keep, points),
+                    &[k] => labeller.one(k as usize, at, keep, points),
+                    several => labeller.nearest(several, at, keep, points),
                 }
             }
         }
@@ -259,10 +269,16 @@ impl RunGrid<'_> {
 }
 
 /// The labelling of one run of pixels (a row's pixels within one sample
-/// cell's columns) given the run's candidate planes.
+/// cell's columns) given the run's candidate planes. A pixel is an inlier
+/// only with a reading (three finite coordinates) at a depth other than 0:
+/// what the pass-through and the normals count as one
+/// ([`SegmentedPlane::pixel_box`]).
 struct RunLabeller<'a> {
     inliers: &'a mut [Vec<u32>],
     sums: &'a mut [MomentSums],
+    boxes: &'a mut [PixelBox],
+    /// The image's width.
+    width: usize,
     /// Per pixel of a run: an inlier of its one candidate plane.
     flags: &'a mut [bool],
     found: &'a [Plane],
@@ -275,19 +291,21 @@ impl RunLabeller<'_> {
     /// and summed; the same inliers and the same additions in the same
     /// order as [`Self::nearest`]. A pixel without a reading is no inlier:
     /// a coordinate that is not finite makes the distance NaN or infinite
-    /// (and the threshold too when it is z, hence its own test).
+    /// (and the threshold too when it is z, hence its own test). The run
+    /// starts at column `at.1` of row `at.0`.
     #[inline]
-    fn one(&mut self, k: usize, first: usize, keep: &[bool], points: &[CloudPoint]) {
+    fn one(&mut self, k: usize, at: (usize, usize), keep: &[bool], points: &[CloudPoint]) {
         let (plane, inliers) = (&self.found[k], &mut self.inliers[k]);
         let flags = &mut self.flags[..points.len()];
         let t = self.t;
         for (flag, (&kept, point)) in flags.iter_mut().zip(keep.iter().zip(points)) {
             let p = to_vec3(point);
             let near = plane.signed_distance(&p).abs() <= t.at(&p);
-            *flag = kept & (p.z.abs() < f64::INFINITY) & near;
+            *flag = kept & (p.z.abs() < f64::INFINITY) & (p.z != 0.0) & near;
         }
         let mut sums = self.sums[k];
-        for (i, (&flag, point)) in (first..).zip(flags.iter().zip(points)) {
+        let (row_start, before) = (at.0 * self.width, inliers.len());
+        for (i, (&flag, point)) in (row_start + at.1..).zip(flags.iter().zip(points)) {
             if flag {
                 inliers.push(i as u32);
                 sums.add(
@@ -298,12 +316,23 @@ impl RunLabeller<'_> {
             }
         }
         self.sums[k] = sums;
+        if let (Some(&a), Some(&b)) = (inliers[before..].first(), inliers.last()) {
+            self.boxes[k].add_run(at.0, a as usize - row_start, b as usize - row_start);
+        }
     }
 
-    /// Each pixel to the nearest of `candidates` within the threshold.
-    fn nearest(&mut self, candidates: &[u16], first: usize, keep: &[bool], points: &[CloudPoint]) {
-        for (i, (&kept, point)) in (first..).zip(keep.iter().zip(points)) {
-            if !kept || !is_measured(point) {
+    /// Each pixel to the nearest of `candidates` within the threshold (the
+    /// run at `at`, as for [`Self::one`]).
+    fn nearest(
+        &mut self,
+        candidates: &[u16],
+        at: (usize, usize),
+        keep: &[bool],
+        points: &[CloudPoint],
+    ) {
+        let row_start = at.0 * self.width;
+        for (i, (&kept, point)) in (row_start + at.1..).zip(keep.iter().zip(points)) {
+            if !kept || !is_measured(point) || point.z_m == 0.0 {
                 continue;
             }
             let p = to_vec3(point);
@@ -316,8 +345,10 @@ impl RunLabeller<'_> {
                 }
             }
             if let Some((_, k)) = best {
-                self.inliers[k as usize].push(i as u32);
-                self.sums[k as usize].add(p.x, p.y, p.z);
+                let k = k as usize;
+                self.inliers[k].push(i as u32);
+                self.sums[k].add(p.x, p.y, p.z);
+                self.boxes[k].add_run(at.0, i - row_start, i - row_start);
             }
         }
     }

@@ -69,7 +69,7 @@ use std::sync::Arc;
 use nalgebra::Vector3;
 use rand_chacha::ChaCha8Rng;
 
-use crate::cloud::CloudView;
+use crate::cloud::{CloudView, PixelBox};
 use crate::plane_fit::{fit_tls, MomentSums, Moments, Plane};
 use crate::segmentation::Proposal;
 
@@ -93,6 +93,11 @@ pub struct SegmentedPlane {
     pub plane: Plane,
     /// Pixel indices of the inliers, in pixel order.
     pub inliers: Vec<u32>,
+    /// The inliers' pixel bounding box, when the segmentation knows it
+    /// (the labelling pass): then every inlier has a reading (three finite
+    /// coordinates) at a depth other than 0, and the pass-through and the
+    /// normals take the box instead of walking the inliers for it.
+    pub pixel_box: Option<PixelBox>,
     /// Mean of the inliers.
     pub centroid: Vector3<f64>,
     /// RMS distance of the inliers from `plane`, metres.

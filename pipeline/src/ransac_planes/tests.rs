@@ -157,6 +157,59 @@ fn tiny_images_and_oversized_strides_give_no_plane_and_no_panic() {
         .is_empty());
 }
 
+/// Each plane's pixel box is its inliers' bounding box, and every inlier
+/// has a reading at a depth other than 0 (the promise the pass-through and
+/// the normals take the box on): finite points at depth 0 on the largest
+/// plane, kept by the caller, are no inliers.
+#[test]
+fn each_planes_pixel_box_bounds_its_inliers_and_every_inlier_is_a_reading() {
+    let scene = Scene::ramp(16.0);
+    let mut cloud = SceneCloud::kinect2(&scene, 4);
+    let w = cloud.width;
+    let keep = vec![true; cloud.points.len()];
+    let cfg = RansacConfig::default();
+    let segment = |cloud: &SceneCloud| {
+        PlaneSegmenter::new()
+            .segment(
+                &cloud.view(),
+                &keep,
+                &cfg,
+                &mut ChaCha8Rng::seed_from_u64(3),
+            )
+            .to_vec()
+    };
+    // Every 97th pixel of the largest plane moved onto it at depth 0.
+    let largest = segment(&cloud).swap_remove(0);
+    let (n, d) = (largest.plane.normal, largest.plane.d);
+    let zero_depth: Vec<u32> = largest.inliers.iter().step_by(97).copied().collect();
+    for &i in &zero_depth {
+        let p = &mut cloud.points[i as usize];
+        p.z_m = 0.0;
+        p.y_m = (-(d + n.x * f64::from(p.x_m)) / n.y) as f32;
+        assert!(largest.plane.signed_distance(&to_vec3(p)).abs() < 1e-6);
+    }
+    assert!(zero_depth.len() > 300, "{}", zero_depth.len());
+    let planes = segment(&cloud);
+    assert!(planes.len() >= 2, "{}", planes.len());
+    let mut labelled = 0;
+    for plane in &planes {
+        assert!(plane.inliers.windows(2).all(|p| p[0] < p[1]));
+        let mut b = crate::cloud::PixelBox::EMPTY;
+        for &i in &plane.inliers {
+            let (i, p) = (i as usize, &cloud.points[i as usize]);
+            assert!(
+                crate::cloud::is_measured(p) && p.z_m != 0.0,
+                "pixel {i}: {p:?}"
+            );
+            b.add_run(i / w, i % w, i % w);
+        }
+        assert_eq!(plane.pixel_box, Some(b));
+        labelled += plane.inliers.len();
+    }
+    // Most pixels are labelled.
+    assert!(labelled * 10 > cloud.points.len() * 8, "{labelled}");
+}
+
 #[test]
 fn junction_pixels_go_to_the_nearer_plane_on_a_shallow_ramp() {
     // A 5 degree ramp: the 30 degree normal gate cannot tell the ground

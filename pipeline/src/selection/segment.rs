@@ -6,6 +6,7 @@ use nalgebra::Vector3;
 
 use super::quality::PooledQuality;
 use super::{Ground, PlaneQuality, PlaneSummary, Selection};
+use crate::cloud::PixelBox;
 use crate::plane_fit::Moments;
 use crate::ransac_planes::SegmentedPlane;
 
@@ -13,6 +14,9 @@ use crate::ransac_planes::SegmentedPlane;
 /// segments together), their centroid and RMS distance from their plane.
 pub(crate) struct PlaneSegment<'a> {
     pub(crate) inliers: &'a [u32],
+    /// The pixels' bounding box, when the segmentation knows it (every
+    /// segment's: [`SegmentedPlane::pixel_box`]).
+    pub(crate) pixel_box: Option<PixelBox>,
     pub(crate) centroid: Vector3<f64>,
     pub(crate) rms_m: f64,
     pub(crate) quality: PlaneQuality,
@@ -25,6 +29,7 @@ impl<'a> PlaneSegment<'a> {
     pub(crate) fn of(plane: &'a SegmentedPlane, summary: &PlaneSummary) -> Self {
         Self {
             inliers: &plane.inliers,
+            pixel_box: plane.pixel_box,
             centroid: plane.centroid,
             rms_m: plane.rms_m,
             quality: summary.quality,
@@ -44,8 +49,10 @@ impl<'a> PlaneSegment<'a> {
         let mut centroid = Vector3::zeros();
         let mut pooled = PooledQuality::default();
         let mut moments = Moments::new();
+        let mut pixel_box = Some(PixelBox::EMPTY);
         for &k in members {
             let p = &planes[k];
+            pixel_box = pixel_box.zip(p.pixel_box).map(|(a, b)| a.union(&b));
             moments.merge(&p.moments);
             merge_sorted(pixels, &p.inliers);
             let n = p.inliers.len() as f64;
@@ -56,6 +63,7 @@ impl<'a> PlaneSegment<'a> {
         let n = pixels.len().max(1) as f64;
         Self {
             inliers: pixels,
+            pixel_box: pixel_box.filter(|b| !b.is_empty()),
             centroid: centroid / n,
             rms_m: quality.rms_m,
             quality,
