@@ -18,26 +18,31 @@ impl PlaneSegmenter {
     /// while its sample point is strictly nearer to that plane and within
     /// the threshold. Each move brings a point strictly nearer to its
     /// plane, so it ends; a coplanar piece elsewhere is never adjacent.
+    /// Leaves every cell's candidate planes (those of its 3x3 cells) as the
+    /// labelling reads them.
     pub(super) fn relax_cells(&mut self, found: &[Plane], t: Threshold) {
         let (cw, ch) = (self.sample.coarse_w, self.sample.coarse_h);
         let neighbours = |c: usize| cell_neighbourhood(c, cw, ch);
-        // Work list: the cells on a border between two planes, then the
+        // Work list: the cells on a border between two planes (a taken
+        // cell with two candidate planes: its own and another), then the
         // neighbours of every cell that moved.
+        self.fill_cell_candidates();
         self.stack.clear();
         self.in_work.clear();
         self.in_work.resize(cw * ch, false);
-        for c in 0..cw * ch {
-            let a = self.cell_plane[c];
-            if a != NO_PLANE
-                && neighbours(c).any(|q| {
-                    let b = self.cell_plane[q];
-                    b != NO_PLANE && b != a
-                })
-            {
+        for (c, (&a, (_, n))) in self
+            .cell_plane
+            .iter()
+            .zip(&self.cell_candidates)
+            .enumerate()
+        {
+            if a != NO_PLANE && *n >= 2 {
                 self.stack.push(c as u32);
                 self.in_work[c] = true;
             }
         }
+        let mut moved = std::mem::take(&mut self.moved);
+        moved.clear();
         while let Some(c) = self.stack.pop() {
             let c = c as usize;
             self.in_work[c] = false;
@@ -57,6 +62,7 @@ impl PlaneSegmenter {
             }
             if best.1 != a {
                 self.cell_plane[c] = best.1;
+                moved.push(c as u32);
                 for q in neighbours(c) {
                     if self.cell_plane[q] != NO_PLANE && !self.in_work[q] {
                         self.in_work[q] = true;
@@ -65,12 +71,28 @@ impl PlaneSegmenter {
                 }
             }
         }
+        // The candidates of the cells around those that moved, afresh, each
+        // once (`in_work` is all false again, `stack` empty).
+        for &c in &moved {
+            for q in neighbours(c as usize) {
+                if !self.in_work[q] {
+                    self.in_work[q] = true;
+                    self.stack.push(q as u32);
+                }
+            }
+        }
+        while let Some(q) = self.stack.pop() {
+            let q = q as usize;
+            self.cell_candidates[q] = self.candidates_of(q % cw, q / cw);
+        }
+        self.moved = moved;
     }
 
     /// Gives every kept, measured pixel to the plane nearest to it among
     /// those that took one of the (up to 3x3) sample points around it, if
     /// within the threshold; fills `planes[k].inliers` (pixel order) and
-    /// `moments[k]`.
+    /// `moments[k]`. Reads the cells' candidate planes as
+    /// [`Self::relax_cells`] leaves them.
     pub(super) fn label_pixels(
         &mut self,
         cloud: &CloudView<'_>,
@@ -85,7 +107,6 @@ impl PlaneSegmenter {
             return;
         }
         self.reset_planes(found);
-        self.fill_cell_candidates();
         self.label_rows(cloud, keep, found, t);
         self.moments.clear();
         self.moments
@@ -118,19 +139,28 @@ impl PlaneSegmenter {
         self.cell_candidates.reserve(cw * ch);
         for cv in 0..ch {
             for cu in 0..cw {
-                let (rows, columns) = neighbourhood_span(cu, cv, cw, ch);
-                let mut set = ([NO_PLANE; 9], 0u8);
-                for r in rows {
-                    for &k in &self.cell_plane[r * cw..][columns.clone()] {
-                        if k != NO_PLANE && !set.0[..set.1 as usize].contains(&k) {
-                            set.0[set.1 as usize] = k;
-                            set.1 += 1;
-                        }
-                    }
-                }
+                let set = self.candidates_of(cu, cv);
                 self.cell_candidates.push(set);
             }
         }
+    }
+
+    /// The distinct planes of the 3x3 cells around cell `(cu, cv)`, row by
+    /// row.
+    #[inline]
+    fn candidates_of(&self, cu: usize, cv: usize) -> ([u16; 9], u8) {
+        let (cw, ch) = (self.sample.coarse_w, self.sample.coarse_h);
+        let (rows, columns) = neighbourhood_span(cu, cv, cw, ch);
+        let mut set = ([NO_PLANE; 9], 0u8);
+        for r in rows {
+            for &k in &self.cell_plane[r * cw..][columns.clone()] {
+                if k != NO_PLANE && !set.0[..set.1 as usize].contains(&k) {
+                    set.0[set.1 as usize] = k;
+                    set.1 += 1;
+                }
+            }
+        }
+        set
     }
 
     /// The labelling pass proper: each kept, measured pixel to the nearest

@@ -168,6 +168,8 @@ pub struct PlaneSegmenter {
     cell_candidates: Vec<([u16; 9], u8)>,
     in_work: Vec<bool>,
     stack: Vec<u32>,
+    /// The cells the relaxation moved.
+    moved: Vec<u32>,
     /// Region search: the inliers' cells, and (after the search) the
     /// largest region's cells, sorted.
     seeds: Vec<u32>,
