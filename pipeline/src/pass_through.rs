@@ -143,7 +143,7 @@ impl PassThrough {
             surface_sample(points, members, &mut self.kept, max_points, total);
         }
         let kept = if cut { &self.kept[..] } else { members };
-        (kept, PlaneSupport::of_segment(members, pixel_box, centre))
+        (kept, PlaneSupport::new(members, pixel_box, centre))
     }
 
     /// Collects the members with a reading into `valid`, each passed to

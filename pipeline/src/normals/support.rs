@@ -24,17 +24,13 @@ pub struct PlaneSupport<'a> {
 }
 
 impl<'a> PlaneSupport<'a> {
-    /// The support of a segmented plane: its inliers `pixels` (in pixel
-    /// order, each with a reading at a depth other than 0: the labelling's
-    /// promise, [`crate::ransac_planes::SegmentedPlane::pixel_box`]), their
-    /// bounding box and a centre near them (the summed-area tables' origin;
-    /// their mean). `None` for an empty box.
-    pub fn of_segment(
-        pixels: &'a [u32],
-        pixel_box: PixelBox,
-        centre: Vector3<f64>,
-    ) -> Option<Self> {
-        (!pixel_box.is_empty()).then_some(Self {
+    /// The support of `pixels` (in pixel order, each with a reading at a
+    /// depth other than 0: the caller's promise, a walk's or the
+    /// labelling's, [`crate::ransac_planes::SegmentedPlane::pixel_box`]),
+    /// their bounding box and a centre near them (the summed-area tables'
+    /// origin; their mean). `None` for an empty box.
+    pub fn new(pixels: &'a [u32], pixel_box: PixelBox, centre: Vector3<f64>) -> Option<Self> {
+        (!pixel_box.is_empty()).then(|| Self {
             pixels,
             bounds: Bounds {
                 u0: pixel_box.u0,
@@ -62,10 +58,7 @@ pub struct SupportWalk {
     /// First pixel of the last pixel's row; before the first pixel,
     /// `-width` (wrapping), which no pixel is within `width` of.
     row_start: usize,
-    u0: usize,
-    v0: usize,
-    u1: usize,
-    v1: usize,
+    pixel_box: PixelBox,
     sum: Vector3<f64>,
     count: usize,
 }
@@ -76,10 +69,7 @@ impl SupportWalk {
         (width > 0).then_some(Self {
             width,
             row_start: 0usize.wrapping_sub(width),
-            u0: usize::MAX,
-            v0: usize::MAX,
-            u1: 0,
-            v1: 0,
+            pixel_box: PixelBox::EMPTY,
             sum: Vector3::zeros(),
             count: 0,
         })
@@ -92,12 +82,12 @@ impl SupportWalk {
         if u >= self.width {
             let v = pixel / self.width;
             self.row_start = v * self.width;
-            self.v0 = self.v0.min(v);
-            self.v1 = self.v1.max(v);
+            let b = &mut self.pixel_box;
+            (b.v0, b.v1) = (b.v0.min(v), b.v1.max(v));
             u = pixel - self.row_start;
         }
-        self.u0 = self.u0.min(u);
-        self.u1 = self.u1.max(u);
+        let b = &mut self.pixel_box;
+        (b.u0, b.u1) = (b.u0.min(u), b.u1.max(u));
         self.sum += to_vec3(p);
         self.count += 1;
     }
@@ -105,16 +95,8 @@ impl SupportWalk {
     /// The summary of `pixels`, the pixels walked (in pixel order, all
     /// measured, the caller's promise); `None` when the walk saw none.
     pub fn finish(self, pixels: &[u32]) -> Option<PlaneSupport<'_>> {
-        (self.count > 0).then(|| PlaneSupport {
-            pixels,
-            bounds: Bounds {
-                u0: self.u0,
-                v0: self.v0,
-                width: self.u1 - self.u0 + 1,
-                height: self.v1 - self.v0 + 1,
-            },
-            centre: self.sum / self.count as f64,
-        })
+        let centre = self.sum / self.count.max(1) as f64;
+        PlaneSupport::new(pixels, self.pixel_box, centre)
     }
 }
 
