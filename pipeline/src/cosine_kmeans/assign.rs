@@ -12,6 +12,13 @@ use super::CosineKmeans;
 /// the order the members were added in.
 const FIXED_ONE: f64 = (1u64 << 36) as f64;
 
+/// The label of a unit vector before the first assignment.
+pub(super) const NO_LABEL: u32 = u32::MAX;
+
+/// Labels compared a block at a time (the blocks without a change,
+/// most of them after the first iterations, are skipped whole).
+const LABEL_BLOCK: usize = 32;
+
 impl CosineKmeans {
     /// The `f32` copies of `unit` that the assignment step reads, and its
     /// fixed-point copies (truncated) that the sums add.
@@ -35,6 +42,47 @@ impl CosineKmeans {
     /// product with normal `i` (the smallest cosine distance; ties go to
     /// the lower index).
     pub(super) fn assign(&mut self, centres: &[Vector3<f64>]) {
+        match centres.len() {
+            2 => self.assign_at_once::<2>(centres),
+            3 => self.assign_at_once::<3>(centres),
+            4 => self.assign_at_once::<4>(centres),
+            _ => self.assign_centre_by_centre(centres),
+        }
+    }
+
+    /// [`Self::assign`] for `K` centres, all of them per normal in one pass
+    /// (each normal loaded once, its best kept in registers): the same dot
+    /// products compared in the same order as
+    /// [`Self::assign_centre_by_centre`].
+    pub(super) fn assign_at_once<const K: usize>(&mut self, centres: &[Vector3<f64>]) {
+        let n = self.ux.len();
+        let c: [[f32; 3]; K] = std::array::from_fn(|j| {
+            [
+                centres[j].x as f32,
+                centres[j].y as f32,
+                centres[j].z as f32,
+            ]
+        });
+        let (ux, uy, uz) = (&self.ux[..n], &self.uy[..n], &self.uz[..n]);
+        self.best.resize(n, 0);
+        let best = &mut self.best[..n];
+        for i in 0..n {
+            let dot = |c: &[f32; 3]| ux[i] * c[0] + uy[i] * c[1] + uz[i] * c[2];
+            let (mut best_dot, mut best_j) = (dot(&c[0]), 0u32);
+            for (j, c) in (1..).zip(&c[1..]) {
+                let d = dot(c);
+                // Branch-free (clusters interleave: a branch mispredicts).
+                let mask = u32::from(d > best_dot).wrapping_neg();
+                best_j = (best_j & !mask) | (j & mask);
+                best_dot = best_dot.max(d);
+            }
+            best[i] = best_j;
+        }
+    }
+
+    /// [`Self::assign`] for any number of centres: one centre at a time
+    /// over all normals.
+    pub(super) fn assign_centre_by_centre(&mut self, centres: &[Vector3<f64>]) {
         let n = self.ux.len();
         let Some((first, others)) = centres.split_first() else {
             return;
@@ -78,20 +126,31 @@ impl CosineKmeans {
     /// they equal each cluster's sum over its members summed afresh.
     pub(super) fn move_labels(&mut self) -> usize {
         let mut changed = 0;
-        for ((label, &best), q) in self.labels.iter_mut().zip(&self.best).zip(&self.fixed) {
-            let best = best as usize;
-            if *label == best {
+        let blocks = self.labels.chunks_mut(LABEL_BLOCK).zip(
+            self.best
+                .chunks(LABEL_BLOCK)
+                .zip(self.fixed.chunks(LABEL_BLOCK)),
+        );
+        for (labels, (best, fixed)) in blocks {
+            // Any label of the block changed (one OR of lanes).
+            let differ = labels.iter().zip(best).fold(0, |d, (&l, &b)| d | (l ^ b));
+            if differ == 0 {
                 continue;
             }
-            if let Some((sum, count)) = self.sums.get_mut(*label) {
-                sum.iter_mut().zip(q).for_each(|(s, q)| *s -= q);
-                *count -= 1;
+            for ((label, &best), q) in labels.iter_mut().zip(best).zip(fixed) {
+                if *label == best {
+                    continue;
+                }
+                if let Some((sum, count)) = self.sums.get_mut(*label as usize) {
+                    sum.iter_mut().zip(q).for_each(|(s, q)| *s -= q);
+                    *count -= 1;
+                }
+                let (sum, count) = &mut self.sums[best as usize];
+                sum.iter_mut().zip(q).for_each(|(s, q)| *s += q);
+                *count += 1;
+                *label = best;
+                changed += 1;
             }
-            let (sum, count) = &mut self.sums[best];
-            sum.iter_mut().zip(q).for_each(|(s, q)| *s += q);
-            *count += 1;
-            *label = best;
-            changed += 1;
         }
         changed
     }

@@ -47,7 +47,7 @@ impl CosineKmeans {
     fn spread_deg(&self, label: usize, centre: &Vector3<f64>) -> f64 {
         let (mut sum_sq, mut count) = (0.0, 0usize);
         for (u, &l) in self.unit.iter().zip(&self.labels) {
-            if l == label {
+            if l as usize == label {
                 let a = angle_between_deg(u, centre);
                 sum_sq += a * a;
                 count += 1;

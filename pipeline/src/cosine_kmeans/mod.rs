@@ -16,11 +16,13 @@
 //!
 //! **How it runs.** The assignment step (each normal to the centre with the
 //! largest dot product) runs on an `f32` structure-of-arrays copy of the
-//! normals, one centre at a time over all normals, which the compiler
-//! vectorises. Each cluster's sum is kept in fixed point (`i64` multiples
+//! normals, which the compiler vectorises: with 2-4 centres (the default
+//! is 3) all of them per normal in one pass, the normal loaded once and
+//! its best kept in registers; with more, one centre at a time over all
+//! normals. Each cluster's sum is kept in fixed point (`i64` multiples
 //! of `2^-36` of the `f64` unit vectors), exact whatever the order of its
 //! additions, so the update step moves only the normals whose label
-//! changed from one sum to the other (after the first iteration a few
+//! changed (found a block of 32 labels at a time) from one sum to the other (after the first iteration a few
 //! percent of them) instead of summing every cluster afresh, and gets the
 //! same sums; centres and spreads stay `f64`. Normals of one plane
 //! differ from their centres by degrees, dot products by 1e-2 to 1e-4,
@@ -65,7 +67,9 @@ pub struct Clustering {
 #[derive(Debug, Default, Clone)]
 pub struct CosineKmeans {
     unit: Vec<Vector3<f64>>,
-    labels: Vec<usize>,
+    /// Each unit vector's cluster (`NO_LABEL` before the first
+    /// assignment), as the assignment step writes it.
+    labels: Vec<u32>,
     /// `f32` copies of `unit`'s coordinates, and per normal the best dot
     /// product and centre of the assignment step.
     ux: Vec<f32>,
@@ -106,7 +110,7 @@ impl CosineKmeans {
         }
         let mut centres = self.farthest_first_centres(k.clamp(1, n))?;
         self.labels.clear();
-        self.labels.resize(n, usize::MAX);
+        self.labels.resize(n, assign::NO_LABEL);
         self.load_copies();
         let (counts, iterations) = self.lloyd(&mut centres, max_iterations);
         Some(self.keep_dominant(centres, counts, iterations, merge_spread_ratio))
@@ -129,7 +133,7 @@ impl CosineKmeans {
         self.unit
             .iter()
             .zip(&self.labels)
-            .filter(move |(_, &l)| l == cluster)
+            .filter(move |(_, &l)| l as usize == cluster)
             .map(|(u, _)| u)
     }
 
@@ -141,7 +145,7 @@ impl CosineKmeans {
         self.unit
             .iter()
             .zip(&self.labels)
-            .filter(move |(_, l)| clustering.kept.contains(l))
+            .filter(move |(_, &l)| clustering.kept.contains(&(l as usize)))
             .map(|(u, _)| u)
     }
 
@@ -157,7 +161,10 @@ impl CosineKmeans {
         let mut labels = self.labels.iter();
         normals.iter().map(move |n| {
             let usable = n.iter().all(|c| c.is_finite()) && n.try_normalize(1e-12).is_some();
-            usable && labels.next().is_some_and(|l| clustering.kept.contains(l))
+            usable
+                && labels
+                    .next()
+                    .is_some_and(|&l| clustering.kept.contains(&(l as usize)))
         })
     }
 }

@@ -138,3 +138,39 @@ fn each_centre_is_the_mean_direction_of_its_members_summed_afresh() {
         }
     }
 }
+
+/// The assignment of 2-4 centres at once gives every normal the centre the
+/// assignment centre by centre gives it (ties included: a normal
+/// equidistant from two centres goes to the lower index either way).
+#[test]
+fn the_assignment_at_once_is_the_assignment_centre_by_centre() {
+    let mut rng = ChaCha8Rng::seed_from_u64(8);
+    let axis = Vector3::new(0.1, -0.9, -0.4).normalize();
+    let mut normals: Vec<Vector3<f64>> = (0..3000).map(|_| jitter(&mut rng, axis, 30.0)).collect();
+    // Exact ties: the normals halfway between the first two centres.
+    let (a, b) = (Vector3::new(0.0, -1.0, 0.0), Vector3::new(0.0, 0.0, -1.0));
+    normals.extend(std::iter::repeat_n((a + b).normalize(), 10));
+    let mut km = CosineKmeans::new();
+    km.load_units(&normals);
+    km.load_copies();
+    let mut moved = 0;
+    for k in 2..=4 {
+        let mut centres: Vec<Vector3<f64>> = (0..k).map(|_| jitter(&mut rng, axis, 20.0)).collect();
+        (centres[0], centres[1]) = (a, b);
+        km.assign_centre_by_centre(&centres);
+        let expected = km.best.clone();
+        km.best.iter_mut().for_each(|b| *b = u32::MAX);
+        match k {
+            2 => km.assign_at_once::<2>(&centres),
+            3 => km.assign_at_once::<3>(&centres),
+            _ => km.assign_at_once::<4>(&centres),
+        }
+        assert_eq!(km.best, expected, "{k} centres");
+        moved += expected.iter().filter(|&&j| j as usize == k - 1).count();
+        // A tie of the first two centres never goes to the second.
+        let ties = &expected[expected.len() - 10..];
+        assert!(ties.iter().all(|&j| j != 1), "{ties:?}");
+    }
+    // Every centre wins some normals.
+    assert!(moved > 100, "{moved}");
+}
