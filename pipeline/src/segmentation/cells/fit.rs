@@ -36,8 +36,12 @@ pub(super) struct RegionFit {
     points: Vec<Vector3<f64>>,
     sample_cells: Vec<u32>,
     limits: Vec<f64>,
-    /// The score subset: indices into `points`.
+    /// The score subset: indices into `points`, and its points' coordinates
+    /// and inlier distances in a structure of arrays (the consensus of a
+    /// hypothesis, in lanes).
     score: Vec<u32>,
+    score_xyz: [Vec<f64>; 3],
+    score_limits: Vec<f64>,
     /// The flood's seeds and the plane's sample cells.
     seeds: Vec<u32>,
     taken: Vec<u32>,
@@ -170,16 +174,26 @@ impl RegionFit {
         let m = n.min(SCORE_POINTS);
         self.score.clear();
         self.score.extend((0..m).map(|i| (i * n / m.max(1)) as u32));
+        let [xs, ys, zs] = &mut self.score_xyz;
+        for (k, coordinate) in [xs, ys, zs].into_iter().enumerate() {
+            coordinate.clear();
+            coordinate.extend(self.score.iter().map(|&j| self.points[j as usize][k]));
+        }
+        self.score_limits.clear();
+        self.score_limits
+            .extend(self.score.iter().map(|&j| self.limits[j as usize]));
     }
 
     /// The consensus of `plane` on the score subset.
     fn consensus(&self, plane: &Plane) -> usize {
-        self.score
-            .iter()
-            .filter(|&&j| {
-                plane.signed_distance(&self.points[j as usize]).abs() <= self.limits[j as usize]
+        let [xs, ys, zs] = &self.score_xyz;
+        let points = xs.iter().zip(ys).zip(zs).zip(&self.score_limits);
+        points
+            .map(|(((&x, &y), &z), &limit)| {
+                let p = Vector3::new(x, y, z);
+                usize::from(plane.signed_distance(&p).abs() <= limit)
             })
-            .count()
+            .sum()
     }
 
     /// The TLS plane of `plane`'s inliers in the score subset.
