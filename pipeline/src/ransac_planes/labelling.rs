@@ -23,24 +23,10 @@ impl PlaneSegmenter {
     pub(super) fn relax_cells(&mut self, found: &[Plane], t: Threshold) {
         let (cw, ch) = (self.sample.coarse_w, self.sample.coarse_h);
         let neighbours = |c: usize| cell_neighbourhood(c, cw, ch);
-        // Work list: the cells on a border between two planes (a taken
-        // cell with two candidate planes: its own and another), then the
+        // Work list: the cells on a border between two planes, then the
         // neighbours of every cell that moved.
         self.fill_cell_candidates();
-        self.stack.clear();
-        self.in_work.clear();
-        self.in_work.resize(cw * ch, false);
-        for (c, (&a, (_, n))) in self
-            .cell_plane
-            .iter()
-            .zip(&self.cell_candidates)
-            .enumerate()
-        {
-            if a != NO_PLANE && *n >= 2 {
-                self.stack.push(c as u32);
-                self.in_work[c] = true;
-            }
-        }
+        self.push_border_cells();
         let mut moved = std::mem::take(&mut self.moved);
         moved.clear();
         while let Some(c) = self.stack.pop() {
@@ -71,10 +57,36 @@ impl PlaneSegmenter {
                 }
             }
         }
-        // The candidates of the cells around those that moved, afresh, each
-        // once (`in_work` is all false again, `stack` empty).
-        for &c in &moved {
-            for q in neighbours(c as usize) {
+        self.refresh_candidates_around(&moved);
+        self.moved = moved;
+    }
+
+    /// The relaxation's first work list (`stack`, each marked `in_work`):
+    /// the cells on a border between two planes, a taken cell with two
+    /// candidate planes (its own and another).
+    #[inline]
+    fn push_border_cells(&mut self) {
+        let cells = self.cell_plane.len();
+        self.stack.clear();
+        self.in_work.clear();
+        self.in_work.resize(cells, false);
+        let candidates = self.cell_plane.iter().zip(&self.cell_candidates);
+        for (c, (&a, (_, n))) in candidates.enumerate() {
+            if a != NO_PLANE && *n >= 2 {
+                self.stack.push(c as u32);
+                self.in_work[c] = true;
+            }
+        }
+    }
+
+    /// The candidates of the cells around those that `moved`, afresh, each
+    /// once (after the relaxation: `in_work` all false, `stack` empty; the
+    /// cells refreshed stay marked, `push_border_cells` clears the marks).
+    #[inline]
+    fn refresh_candidates_around(&mut self, moved: &[u32]) {
+        let (cw, ch) = (self.sample.coarse_w, self.sample.coarse_h);
+        for &c in moved {
+            for q in cell_neighbourhood(c as usize, cw, ch) {
                 if !self.in_work[q] {
                     self.in_work[q] = true;
                     self.stack.push(q as u32);
@@ -85,7 +97,6 @@ impl PlaneSegmenter {
             let q = q as usize;
             self.cell_candidates[q] = self.candidates_of(q % cw, q / cw);
         }
-        self.moved = moved;
     }
 
     /// Gives every kept, measured pixel to the plane nearest to it among

@@ -290,9 +290,9 @@ fn needing_pixels(stats: &[f32], block_z: &[f32]) -> ([u8; 32], usize) {
 /// Pixels of a block of 32 without a complete disc from which their present
 /// neighbours' sums are taken for the whole block at once: one pixel's
 /// alone costs about an eighth of the block's (the block's 64 sums do not
-/// fit the registers). Set by callgrind, `Estimator::run` on stairs-front
-/// / the office, M instructions: 6: 124.0 / 139.1, 8: 123.9 / 139.1, 12:
-/// 124.2 / 139.2; every pixel alone: 125.3 on stairs-front.
+/// fit the registers). Set by callgrind: 8 saves the most on stairs-front
+/// and the office (1.4 M of `Estimator::run` on stairs-front against every
+/// pixel alone; 6 and 12 about 0.1-0.3 M less).
 const PRESENT_BLOCK_MIN: usize = 8;
 
 /// The finite pair distances' sums and counts of the pixels `u0..u0 + len`
