@@ -22,9 +22,9 @@
 //! normals. Each cluster's sum is kept in fixed point (`i64` multiples
 //! of `2^-36` of the `f64` unit vectors), exact whatever the order of its
 //! additions, so the update step moves only the normals whose label
-//! changed (found a block of 32 labels at a time) from one sum to the other (after the first iteration a few
-//! percent of them) instead of summing every cluster afresh, and gets the
-//! same sums; centres and spreads stay `f64`. Normals of one plane
+//! changed (found a block of 32 labels at a time) from one sum to the
+//! other (after the first iteration a few percent of them) instead of
+//! summing every cluster afresh, and gets the same sums; centres and spreads stay `f64`. Normals of one plane
 //! differ from their centres by degrees, dot products by 1e-2 to 1e-4,
 //! against `f32` rounding of 6e-8: a label can change only for a normal
 //! equidistant from two centres to that precision.

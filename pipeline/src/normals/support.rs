@@ -28,8 +28,14 @@ impl<'a> PlaneSupport<'a> {
     /// depth other than 0: the caller's promise, a walk's or the
     /// labelling's, [`crate::ransac_planes::SegmentedPlane::pixel_box`]),
     /// their bounding box and a centre near them (the summed-area tables'
-    /// origin; their mean). `None` for an empty box.
-    pub fn new(pixels: &'a [u32], pixel_box: PixelBox, centre: Vector3<f64>) -> Option<Self> {
+    /// origin; their mean). `None` for an empty box. Crate-only: a box
+    /// that does not hold the pixels would send the tables out of range,
+    /// so outside the crate a support comes from a [`SupportWalk`].
+    pub(crate) fn new(
+        pixels: &'a [u32],
+        pixel_box: PixelBox,
+        centre: Vector3<f64>,
+    ) -> Option<Self> {
         (!pixel_box.is_empty()).then(|| Self {
             pixels,
             bounds: Bounds {
