@@ -10,6 +10,7 @@
 //! method = "paper"          # "paper" | "least-squares" | "tls"
 //! seed = 0                  # seed of every random draw (RANSAC, averaging)
 //! threads = 1               # threads of a frame's stages (1..=64)
+//! pin_threads = true        # with threads > 1: each worker on a CPU of its own
 //!
 //! [outlier]                 # statistical outlier removal (paper 2.1)
 //! neighbours = 20           # m
@@ -96,6 +97,10 @@ pub struct EstimatorConfig {
     /// Threads a frame's stages may run on (1: the caller's only); the
     /// estimate is the same for every count (pipeline README, "Threads").
     pub threads: usize,
+    /// With `threads` > 1, each worker thread bound to a CPU of its own
+    /// (worker k to the k-th CPU the process may use); false lets the
+    /// scheduler move them (`workers.rs` says why binding pays).
+    pub pin_threads: bool,
     pub outlier: OutlierConfig,
     pub ransac: RansacConfig,
     pub segmentation: SegmentationConfig,
@@ -115,6 +120,7 @@ impl Default for EstimatorConfig {
             method: SlopeMethod::Paper,
             seed: 0,
             threads: 1,
+            pin_threads: true,
             outlier: OutlierConfig::default(),
             ransac: RansacConfig::default(),
             segmentation: SegmentationConfig::default(),

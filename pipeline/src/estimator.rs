@@ -145,19 +145,7 @@ impl Estimator {
     /// The worker pool for `config.threads` (none for 1); without one (the
     /// system refused the threads) the stages run on the caller's thread.
     fn with_threads(mut self) -> Self {
-        let threads = self.config.threads;
-        if threads > 1 {
-            match rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .thread_name(|k| format!("slope-estimator-{k}"))
-                .build()
-            {
-                Ok(pool) => self.pool = Some(Arc::new(pool)),
-                Err(e) => {
-                    tracing::warn!(threads, error = %e, "cannot start the estimator's threads: running on one");
-                }
-            }
-        }
+        self.pool = crate::workers::worker_pool(self.config.threads, self.config.pin_threads);
         self.segmenter.set_workers(self.pool.clone());
         self
     }

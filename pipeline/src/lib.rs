@@ -59,6 +59,7 @@ pub mod statistical_outlier;
 pub mod surfaces_message;
 pub mod tracking;
 pub mod validate;
+mod workers;
 
 pub use cloud::CloudView;
 pub use config::{
