@@ -7,7 +7,7 @@
 //! near the waker, often the caller's own, busy one; the worker then waits
 //! there for the scheduler to move it to the idle CPU, and the caller has
 //! done most of the work by then. On this project's 2-CPU virtual machine
-//! two unbound threads took 0.97-1.02x the latency of one; bound, 0.74-0.78x
+//! two unbound threads took 0.92-1.08x the latency of one; bound, 0.72-0.94x
 //! (BENCHMARKS.md, "Threads"). A bound worker stays on its CPU: other busy
 //! processes bound to the same CPUs slow it, which `pin_threads = false`
 //! (or a systemd `CPUAffinity=` that gives the service CPUs of its own)
@@ -45,9 +45,10 @@ pub(crate) fn worker_pool(threads: usize, pin: bool) -> Option<Arc<rayon::Thread
 /// Binds the calling worker `k` to `cpus[k % len]` (nothing for an empty
 /// set: not pinning, or the set could not be read).
 fn bind(k: usize, cpus: &[core_affinity::CoreId]) {
-    let Some(&cpu) = cpus.get(k % cpus.len().max(1)) else {
+    if cpus.is_empty() {
         return;
-    };
+    }
+    let cpu = cpus[k % cpus.len()];
     if !core_affinity::set_for_current(cpu) {
         tracing::warn!(
             worker = k,
