@@ -147,6 +147,9 @@ impl Estimator {
     fn with_threads(mut self) -> Self {
         self.pool = crate::workers::worker_pool(self.config.threads, self.config.pin_threads);
         self.segmenter.set_workers(self.pool.clone());
+        for plane in [&mut self.paper.inclined, &mut self.paper.ground] {
+            plane.normals.window.set_workers(self.pool.clone());
+        }
         self
     }
 

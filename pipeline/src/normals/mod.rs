@@ -78,8 +78,7 @@ use nalgebra::Vector3;
 
 use crate::cloud::{is_measured, CloudView};
 use crate::plane_fit::smallest_eigenvector_3x3;
-use eigen::smallest_eigenvector_sym3;
-use window_cache::{WindowKey, WindowNormals};
+use window_pass::{WindowChunk, WindowPass, CHUNK};
 
 mod config;
 mod eigen;
@@ -88,6 +87,7 @@ mod ray_noise;
 mod support;
 mod tree;
 mod window_cache;
+mod window_pass;
 mod window_table;
 
 pub use config::NormalsConfig;
@@ -143,12 +143,12 @@ pub struct NormalEstimator {
     normals: Vec<Vector3<f64>>,
     radius: Vec<u16>,
     fallback: Vec<usize>,
-    /// Window moment sums per member (count 0: no window), and the table
-    /// cells the window covers.
-    sums: Vec<[f64; CHANNELS]>,
-    window: Vec<WindowKey>,
-    /// The normal of each distinct window (`window_cache.rs`).
-    window_normals: WindowNormals,
+    /// The window pass's chunks (one without workers), each with its own
+    /// cache of one normal per distinct window (`window_pass.rs`).
+    chunks: Vec<WindowChunk>,
+    /// With `threads` > 1: the estimator's worker threads, which pass the
+    /// chunks at once.
+    workers: Option<std::sync::Arc<rayon::ThreadPool>>,
 }
 
 /// Pixel bounding box `[u0, u1) x [v0, v1)`.
@@ -163,6 +163,12 @@ struct Bounds {
 impl NormalEstimator {
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// Threads the window pass may use (`None`: the caller's alone); the
+    /// normals are the same, bit for bit, either way.
+    pub fn set_workers(&mut self, workers: Option<std::sync::Arc<rayon::ThreadPool>>) {
+        self.workers = workers;
     }
 
     /// Normals of the points `members` (pixel indices into `cloud`, one
@@ -256,13 +262,25 @@ impl NormalEstimator {
         };
         let (bounds, centre) = (support.bounds, support.centre);
         self.build_table(cloud, support.pixels, &bounds, &centre);
-        self.find_windows(cloud, members, &bounds, config, &mut stats);
         let noise_scale = if config.ray_noise_correction {
             1.0
         } else {
             0.0
         };
-        self.window_normals(cloud, members, &centre, noise_scale, viewpoint, &mut stats);
+        // The table is read by the chunks while the estimator's other
+        // buffers take their results.
+        let table = std::mem::take(&mut self.table);
+        let pass = WindowPass {
+            cloud,
+            table: &table,
+            bounds,
+            config,
+            centre,
+            noise_scale,
+            viewpoint: *viewpoint,
+        };
+        self.pass_windows(pass, members, &mut stats);
+        self.table = table;
         // Interior points only: a point the windows could not serve is no
         // interior point, so when the interior normals will be kept alone
         // the k-d tree is not built for the others.
@@ -292,43 +310,44 @@ impl NormalEstimator {
         self.fallback.clear();
         self.radius.clear();
         self.radius.resize(members, u16::MAX);
-        self.sums.clear();
-        self.sums.resize(members, [0.0; CHANNELS]);
-        self.window.clear();
-        self.window.resize(members, WindowKey::default());
-        self.window_normals.clear();
     }
 
-    /// The oriented normal of each member with a window, from its sums
-    /// (coordinates relative to `centre`), solved once per distinct window;
-    /// a degenerate window counts as undefined.
-    fn window_normals(
-        &mut self,
-        cloud: &CloudView<'_>,
-        members: &[u32],
-        centre: &Vector3<f64>,
-        noise_scale: f64,
-        viewpoint: &Vector3<f64>,
-        stats: &mut NormalStats,
-    ) {
-        let focal = cloud.focal_px();
-        for (slot, &pixel) in members.iter().enumerate() {
-            let m = &self.sums[slot];
-            if m[0] < 0.5 {
-                continue;
-            }
-            let Some(p) = cloud.point(pixel as usize) else {
-                continue;
+    /// Runs the window pass over `members`: in chunks on the workers when
+    /// there are workers and more than one chunk, else as one chunk; then
+    /// gathers the chunks' fallbacks (in member order) and counts.
+    fn pass_windows(&mut self, pass: WindowPass<'_>, members: &[u32], stats: &mut NormalStats) {
+        let pool = self.workers.as_deref();
+        let size = match pool {
+            Some(_) => CHUNK,
+            None => members.len().max(1),
+        };
+        let count = members.len().div_ceil(size);
+        if self.chunks.len() < count {
+            self.chunks.resize_with(count, WindowChunk::default);
+        }
+        let jobs = members
+            .chunks(size)
+            .zip(self.radius.chunks_mut(size))
+            .zip(self.normals.chunks_mut(size))
+            .zip(&mut self.chunks)
+            .enumerate();
+        let run =
+            move |(j, (((members, radius), normals), chunk)): (usize, (_, &mut WindowChunk))| {
+                pass.run((members, j * size), radius, normals, chunk);
             };
-            let solve = smallest_eigenvector_sym3;
-            let normal = self.window_normals.get_or_solve(self.window[slot], || {
-                normal_from_sums_by(m, centre, noise_scale, focal, solve)
-            });
-            if let Some(n) = normal {
-                self.normals[slot] = orient(n, &p, viewpoint);
-            } else {
-                stats.undefined += 1;
-            }
+        match pool {
+            Some(pool) if count > 1 => pool.scope(|scope| {
+                for job in jobs {
+                    scope.spawn(move |_| run(job));
+                }
+            }),
+            _ => jobs.for_each(run),
+        }
+        self.fallback.clear();
+        for chunk in &self.chunks[..count] {
+            self.fallback.extend_from_slice(&chunk.fallback);
+            stats.from_window += chunk.stats.from_window;
+            stats.undefined += chunk.stats.undefined;
         }
     }
 

@@ -335,3 +335,66 @@ fn shared_windows_give_each_member_its_own_normal() {
         );
     }
 }
+
+/// The window pass in chunks on 2 and 3 threads gives every normal and
+/// count of one thread, bit for bit: on a noisy ramp with holes, members
+/// outside the support's box (the k-d tree's), unmeasured members, and
+/// both `interior_only` settings.
+#[test]
+fn chunks_on_threads_give_the_normals_of_one_thread_bit_for_bit() {
+    let mut cloud = SceneCloud::render(&Scene::ramp(20.0), 256, 212, 0.003, 7);
+    for p in cloud.points.iter_mut().skip(3).step_by(17) {
+        *p = slope_ipc_types::CloudPoint::INVALID;
+    }
+    let view = cloud.view();
+    let measured = all_measured(&cloud);
+    // The support: the lower two thirds; members: every point, some
+    // unmeasured, some above the support's box.
+    let support: Vec<u32> = measured
+        .iter()
+        .copied()
+        .filter(|&i| i >= 256 * 70)
+        .collect();
+    let members: Vec<u32> = (0..cloud.points.len() as u32).step_by(3).collect();
+    assert!(members.len() > 4 * window_pass::CHUNK, "{}", members.len());
+    for interior_only in [false, true] {
+        let cfg = NormalsConfig {
+            interior_only,
+            ..NormalsConfig::default()
+        };
+        let bits = |n: &[Vector3<f64>]| -> Vec<[u64; 3]> {
+            n.iter()
+                .map(|v| [v.x, v.y, v.z].map(f64::to_bits))
+                .collect()
+        };
+        let mut one = NormalEstimator::new();
+        let (normals, stats) =
+            one.estimate_with_support(&view, &members, &support, &cfg, &Vector3::zeros());
+        let (expected, expected_stats) = (bits(normals), stats);
+        assert!(
+            stats.from_window > 5000
+                && stats.undefined > 0
+                && if interior_only {
+                    stats.border > 0
+                } else {
+                    stats.from_tree > 0
+                },
+            "{stats:?}"
+        );
+        for threads in [2, 3] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("a thread pool");
+            let mut many = NormalEstimator::new();
+            many.set_workers(Some(std::sync::Arc::new(pool)));
+            // Twice: the second call reuses the chunks' buffers.
+            many.estimate_with_support(&view, &members, &support, &cfg, &Vector3::zeros());
+            let (normals, stats) =
+                many.estimate_with_support(&view, &members, &support, &cfg, &Vector3::zeros());
+            let case = format!("interior_only {interior_only}, {threads} threads");
+            assert!(bits(normals) == expected, "{case}");
+            assert_eq!(stats, expected_stats, "{case}");
+        }
+    }
+}

@@ -4,69 +4,10 @@
 use nalgebra::Vector3;
 
 use super::window_cache::WindowKey;
-use super::{
-    moments, Bounds, NormalEstimator, NormalStats, NormalsConfig, CHANNELS, TABLE_CELL_PX,
-};
-use crate::cloud::{is_measured, to_vec3, CloudView};
+use super::{moments, Bounds, NormalEstimator, CHANNELS, TABLE_CELL_PX};
+use crate::cloud::{to_vec3, CloudView};
 
 impl NormalEstimator {
-    /// For each member, the moment sums of its smallest window (from the
-    /// table over `bounds`) that holds K points and spans the patch radius,
-    /// into `sums`, and how far it had to grow, into `radius`; a member
-    /// outside the bounds or without such a window goes to `fallback`.
-    pub(super) fn find_windows(
-        &mut self,
-        cloud: &CloudView<'_>,
-        members: &[u32],
-        bounds: &Bounds,
-        config: &NormalsConfig,
-        stats: &mut NormalStats,
-    ) {
-        let w = cloud.width;
-        let k = config.neighbours.max(3);
-        let focal = cloud.focal_px();
-        let r0 = start_radius(k);
-        let r_max = config.max_window_radius_px.max(r0);
-        let g = TABLE_CELL_PX;
-        let cells = (bounds.width.div_ceil(g), bounds.height.div_ceil(g));
-        for (slot, &pixel) in members.iter().enumerate() {
-            let pixel = pixel as usize;
-            let Some(p) = cloud.points.get(pixel).filter(|p| is_measured(p)) else {
-                stats.undefined += 1;
-                continue;
-            };
-            let (Some(u), Some(v)) = (
-                (pixel % w)
-                    .checked_sub(bounds.u0)
-                    .filter(|&u| u < bounds.width),
-                (pixel / w)
-                    .checked_sub(bounds.v0)
-                    .filter(|&v| v < bounds.height),
-            ) else {
-                self.fallback.push(slot);
-                continue;
-            };
-            self.radius[slot] = u16::MAX;
-            // The patch spans at least `min_patch_radius_m` on the surface.
-            let metric = (config.min_patch_radius_m * focal / f64::from(p.z_m).max(1e-3)).ceil();
-            let r_start = if metric.is_finite() {
-                (metric as usize).clamp(r0, r_max.max(r0))
-            } else {
-                r0
-            };
-            match smallest_window(&self.table, cells, (u, v), r_start..=r_max, k) {
-                Some((m, r, window)) => {
-                    stats.from_window += 1;
-                    // 0: the first window sufficed (an interior point).
-                    self.radius[slot] = (r - r_start) as u16;
-                    self.sums[slot] = m;
-                    self.window[slot] = window;
-                }
-                None => self.fallback.push(slot),
-            }
-        }
-    }
-
     /// Summed-area tables of the ten moments over the bounding box, one
     /// cell per `TABLE_CELL_PX` x `TABLE_CELL_PX` block of pixels, from
     /// `pixels`: measured, in pixel order, inside `b` (a [`PlaneSupport`]'s).
@@ -170,7 +111,7 @@ fn add_into(into: &mut [f64; CHANNELS], from: &[f64; CHANNELS]) {
 }
 
 /// Smallest radius whose square window holds K pixels.
-fn start_radius(k: usize) -> usize {
+pub(super) fn start_radius(k: usize) -> usize {
     let mut r = 1;
     while (2 * r + 1) * (2 * r + 1) < k {
         r += 1;
@@ -184,7 +125,7 @@ fn start_radius(k: usize) -> usize {
 /// the window covers the whole table of `cells` = (columns, rows) before).
 /// A window holds the table cells its pixels touch.
 #[inline]
-fn smallest_window(
+pub(super) fn smallest_window(
     table: &[[f64; CHANNELS]],
     (bw, bh): (usize, usize),
     (u, v): (usize, usize),

@@ -127,6 +127,9 @@ pub struct SampleCells<'a> {
     /// then goes to the nearest of the planes of the 3x3 sample cells
     /// around it, within the threshold.
     pub labels: &'a mut [u16],
+    /// The estimator's worker threads, if any, for the proposal's own
+    /// banded passes (which must give the same bits with or without them).
+    pub workers: Option<&'a rayon::ThreadPool>,
 }
 
 /// A way of proposing the planes of a frame on the sample grid, in place
@@ -254,6 +257,7 @@ impl PlaneSegmenter {
             rows: &self.sample.rows,
             points: &self.sample.cell_point,
             labels: &mut self.cell_plane,
+            workers: self.workers.as_deref(),
         };
         let mut found = proposal.propose(cloud, keep, cells, config, rng);
         found.truncate(config.plane_cap(Proposal::Cells.max_planes()));
@@ -292,7 +296,8 @@ impl PlaneSegmenter {
         config: &RansacConfig,
         cos_gate: Option<f64>,
     ) {
-        self.sample.load(cloud, keep, config, cos_gate);
+        self.sample
+            .load(cloud, keep, config, cos_gate, self.workers.as_deref());
         self.cell_plane.clear();
         self.cell_plane
             .resize(self.sample.coarse_w * self.sample.coarse_h, NO_PLANE);

@@ -94,6 +94,24 @@ impl Points {
         self.tag.reserve(n);
     }
 
+    /// Adds `other`'s points after these, in their order.
+    pub fn append(&mut self, other: &Points) {
+        let from = [
+            &other.x,
+            &other.y,
+            &other.z,
+            &other.nx,
+            &other.ny,
+            &other.nz,
+            &other.t,
+            &other.gate,
+        ];
+        for (to, from) in self.float_columns().into_iter().zip(from) {
+            to.extend_from_slice(from);
+        }
+        self.tag.extend_from_slice(&other.tag);
+    }
+
     /// Adds a point; `normal` `None` when unknown, `cos_gate` the
     /// configured gate (`None`: off).
     #[inline]

@@ -40,45 +40,103 @@ pub(super) struct SampleGrid {
     /// Scratch for [`Self::compact`]: the free points removed, and kept.
     removed: Vec<u32>,
     keep: Vec<u32>,
+    /// Scratch for a banded [`Self::load`]: each band's points.
+    band_points: Vec<Points>,
 }
 
-impl SampleGrid {
-    /// Fills the grid from the kept, measured pixels of `cloud`.
-    pub fn load(
-        &mut self,
-        cloud: &CloudView<'_>,
-        keep: &[bool],
-        config: &RansacConfig,
-        cos_gate: Option<f64>,
-    ) {
-        self.points.clear();
-        let t = Threshold::of(config);
-        let s = config.sample_stride_px.max(1);
-        let (w, h) = (cloud.width, cloud.height);
-        self.stride = s;
-        self.columns.build(w, s);
-        self.rows.build(h, s);
-        self.coarse_w = self.columns.len();
-        self.coarse_h = self.rows.len();
-        self.points.reserve(self.coarse_w * self.coarse_h);
+/// What [`SampleGrid::load`] reads: the pixels, the sample columns and
+/// rows, the inlier distance and the normal gate.
+#[derive(Clone, Copy)]
+struct RowLoader<'a> {
+    cloud: &'a CloudView<'a>,
+    keep: &'a [bool],
+    columns: &'a [u32],
+    rows: &'a [u32],
+    t: Threshold,
+    cos_gate: Option<f64>,
+}
+
+impl RowLoader<'_> {
+    /// Adds the kept, measured sample points of the sample rows `rows` to
+    /// `points`, in raster order, each with its coarse normal when the
+    /// gate is on.
+    fn load_rows(&self, rows: std::ops::Range<usize>, points: &mut Points) {
+        let (cloud, keep) = (self.cloud, self.keep);
+        let (w, coarse_w) = (cloud.width, self.columns.len());
         let radius = 2;
-        for (row, &v) in self.rows.at.iter().enumerate() {
-            for (column, &u) in self.columns.at.iter().enumerate() {
-                let (u, v) = (u as usize, v as usize);
+        for row in rows {
+            let v = self.rows[row] as usize;
+            for (column, &u) in self.columns.iter().enumerate() {
+                let u = u as usize;
                 let i = v * w + u;
                 if !keep[i] || !is_measured(&cloud.points[i]) {
                     continue;
                 }
-                let n = if cos_gate.is_some() {
+                let n = if self.cos_gate.is_some() {
                     central_difference_normal(cloud, keep, u, v, radius)
                         .or_else(|| grid_normal(cloud, keep, u, v, radius, 2))
                 } else {
                     None
                 };
                 let p = to_vec3(&cloud.points[i]);
-                let cell = row * self.coarse_w + column;
-                self.points.push(&p, n.as_ref(), &t, cos_gate, cell as u32);
+                let cell = row * coarse_w + column;
+                points.push(&p, n.as_ref(), &self.t, self.cos_gate, cell as u32);
             }
+        }
+    }
+}
+
+impl SampleGrid {
+    /// Fills the grid from the kept, measured pixels of `cloud`. With a
+    /// pool the sample rows are cut into bands, two per thread, each
+    /// loaded on a worker and appended in order: the same points, bit for
+    /// bit, whatever the thread count.
+    pub fn load(
+        &mut self,
+        cloud: &CloudView<'_>,
+        keep: &[bool],
+        config: &RansacConfig,
+        cos_gate: Option<f64>,
+        pool: Option<&rayon::ThreadPool>,
+    ) {
+        self.points.clear();
+        let s = config.sample_stride_px.max(1);
+        self.stride = s;
+        self.columns.build(cloud.width, s);
+        self.rows.build(cloud.height, s);
+        self.coarse_w = self.columns.len();
+        self.coarse_h = self.rows.len();
+        self.points.reserve(self.coarse_w * self.coarse_h);
+        let loader = RowLoader {
+            cloud,
+            keep,
+            columns: &self.columns.at,
+            rows: &self.rows.at,
+            t: Threshold::of(config),
+            cos_gate,
+        };
+        let bands = pool.map_or(1, |p| (2 * p.current_num_threads()).min(self.coarse_h));
+        match pool {
+            Some(pool) if bands > 1 => {
+                let per_band = self.coarse_h.div_ceil(bands);
+                if self.band_points.len() < bands {
+                    self.band_points.resize_with(bands, Points::default);
+                }
+                let jobs = self.band_points[..bands].iter_mut().enumerate();
+                pool.scope(|scope| {
+                    for (b, points) in jobs {
+                        let rows = b * per_band..((b + 1) * per_band).min(loader.rows.len());
+                        scope.spawn(move |_| {
+                            points.clear();
+                            loader.load_rows(rows, points);
+                        });
+                    }
+                });
+                for band in &self.band_points[..bands] {
+                    self.points.append(band);
+                }
+            }
+            _ => loader.load_rows(0..self.coarse_h, &mut self.points),
         }
         self.rebuild_cells();
         self.cell_point.clear();

@@ -365,7 +365,7 @@ fn removing_sample_points_keeps_the_others_in_order() {
     let config = RansacConfig::default();
     let cos_gate = Some(config.normal_threshold_deg.to_radians().cos());
     let mut grid = SampleGrid::default();
-    grid.load(&cloud.view(), &keep, &config, cos_gate);
+    grid.load(&cloud.view(), &keep, &config, cos_gate, None);
     let n = grid.points.len();
     assert!(n > 400, "{n}");
     // Flags point j of `len` when j % step == at.
@@ -391,4 +391,50 @@ fn removing_sample_points_keeps_the_others_in_order() {
     remove_and_check(&mut grid, &every(m, m, m - 1), false);
     remove_and_check(&mut grid, &every(m - 1, 1, 0), false);
     assert_eq!(grid.points.len(), 0);
+}
+
+/// A pool of `threads` plain workers, for the banded passes.
+fn pool_of(threads: usize) -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("a thread pool")
+}
+
+/// The sample grid loaded in bands on 2 and 3 threads (4 and 6 bands, the
+/// last shorter) holds the points of the one-thread load, in the same
+/// order, with the same normals, gates and cells.
+#[test]
+fn a_banded_sample_load_gives_the_points_of_one_thread() {
+    use super::sample::SampleGrid;
+    let mut cloud = SceneCloud::render(&Scene::ramp(16.0), 512, 424, 0.004, 3);
+    // Holes: a band with no measured pixel, and scattered misses.
+    for (i, p) in cloud.points.iter_mut().enumerate() {
+        if (100 * 512..140 * 512).contains(&i) || i % 37 == 0 {
+            p.z_m = f32::NAN;
+        }
+    }
+    let keep: Vec<bool> = (0..cloud.points.len()).map(|i| i % 11 != 0).collect();
+    let config = RansacConfig::default();
+    let cos_gate = Some(config.normal_threshold_deg.to_radians().cos());
+    let loaded = |pool: Option<&rayon::ThreadPool>| {
+        let mut grid = SampleGrid::default();
+        grid.load(&cloud.view(), &keep, &config, cos_gate, pool);
+        let normals: Vec<_> = (0..grid.points.len())
+            .map(|j| grid.points.normal(j))
+            .collect();
+        let cells: Vec<_> = grid
+            .cell_point
+            .iter()
+            .map(|p| p.map(f64::to_bits))
+            .collect();
+        (free_points(&grid), normals, grid.coarse.clone(), cells)
+    };
+    let one = loaded(None);
+    assert!(one.0.len() > 5000, "{}", one.0.len());
+    assert!(one.1.iter().filter(|n| n.is_some()).count() > 4000);
+    for threads in [2, 3] {
+        let pool = pool_of(threads);
+        assert!(loaded(Some(&pool)) == one, "{threads} threads");
+    }
 }

@@ -71,6 +71,8 @@ mod grid_disc;
 mod square_window;
 mod threshold;
 
+use slope_ipc_types::CloudPoint;
+
 use crate::cloud::CloudView;
 
 pub use config::{Fallback, OutlierConfig};
@@ -168,7 +170,7 @@ impl StatisticalOutlierFilter {
         let m = config.neighbours.clamp(1, MAX_NEIGHBOURS);
         let r = window_radius(m);
         let r_fb = r + 2;
-        self.load_padded(cloud, r_fb);
+        self.load_padded(cloud, r_fb, pool);
         self.mean_distance.resize(n, f32::NAN);
         if m == 20 {
             let present = config.fallback == Fallback::PresentNeighbours;
@@ -181,8 +183,9 @@ impl StatisticalOutlierFilter {
     }
 
     /// Copies the cloud into NaN-padded coordinate planes. The padding is
-    /// written only when the shape changes; every call rewrites the inside.
-    fn load_padded(&mut self, cloud: &CloudView<'_>, pad: usize) {
+    /// written only when the shape changes; every call rewrites the inside,
+    /// in bands of rows on the pool's threads when there is a pool.
+    fn load_padded(&mut self, cloud: &CloudView<'_>, pad: usize, pool: Option<&rayon::ThreadPool>) {
         let (w, h) = (cloud.width, cloud.height);
         let pw = w + 2 * pad;
         let len = pw * (h + 2 * pad) + TAIL;
@@ -193,19 +196,44 @@ impl StatisticalOutlierFilter {
             }
             self.padded_shape = (w, h, pad);
         }
-        for v in 0..h {
-            let src = &cloud.points[v * w..(v + 1) * w];
-            let dst = (v + pad) * pw + pad;
-            let xs = &mut self.xs[dst..dst + w];
-            let ys = &mut self.ys[dst..dst + w];
-            let zs = &mut self.zs[dst..dst + w];
-            for (((p, x), y), z) in src.iter().zip(xs).zip(ys).zip(zs) {
-                let finite = zero_if_finite(p.x_m) + zero_if_finite(p.y_m) + zero_if_finite(p.z_m);
-                let valid = finite == 0.0;
-                *x = if valid { p.x_m } else { f32::NAN };
-                *y = if valid { p.y_m } else { f32::NAN };
-                *z = if valid { p.z_m } else { f32::NAN };
-            }
+        let bands = pool.map_or(1, |p| (2 * p.current_num_threads()).min(h));
+        let rows = h.div_ceil(bands);
+        // The padded rows pad..pad + h, `rows` of them to a band.
+        let inside = pad * pw..(pad + h) * pw;
+        let [xs, ys, zs] = [&mut self.xs, &mut self.ys, &mut self.zs]
+            .map(|plane| plane[inside.clone()].chunks_mut(rows * pw));
+        let jobs = cloud.points.chunks(rows * w).zip(xs).zip(ys.zip(zs));
+        let copy = move |((src, xs), (ys, zs)): ((&[CloudPoint], &mut [f32]), _)| {
+            copy_rows(src, [xs, ys, zs], (w, pad));
+        };
+        match pool {
+            Some(pool) if bands > 1 => pool.scope(|scope| {
+                for job in jobs {
+                    scope.spawn(move |_| copy(job));
+                }
+            }),
+            _ => jobs.for_each(copy),
+        }
+    }
+}
+
+/// Copies the rows of points `src` (`w` to a row) into the inside of the
+/// padded rows `planes` (`w + 2 pad` to a row), NaN where a coordinate is
+/// not finite.
+fn copy_rows(src: &[CloudPoint], planes: [&mut [f32]; 3], (w, pad): (usize, usize)) {
+    let pw = w + 2 * pad;
+    let [xs, ys, zs] = planes;
+    for (v, src) in src.chunks(w).enumerate() {
+        let dst = v * pw + pad;
+        let xs = &mut xs[dst..dst + w];
+        let ys = &mut ys[dst..dst + w];
+        let zs = &mut zs[dst..dst + w];
+        for (((p, x), y), z) in src.iter().zip(xs).zip(ys).zip(zs) {
+            let finite = zero_if_finite(p.x_m) + zero_if_finite(p.y_m) + zero_if_finite(p.z_m);
+            let valid = finite == 0.0;
+            *x = if valid { p.x_m } else { f32::NAN };
+            *y = if valid { p.y_m } else { f32::NAN };
+            *z = if valid { p.z_m } else { f32::NAN };
         }
     }
 }

@@ -152,6 +152,58 @@ pub(super) struct CellGrid {
     column_cell: Vec<u32>,
 }
 
+/// What a band of [`CellGrid::load`] reads: the pixels, the columns
+/// summed and their cells, each sample row's cell row.
+#[derive(Clone, Copy)]
+struct RowSummer<'a> {
+    cloud: &'a CloudView<'a>,
+    keep: &'a [bool],
+    columns: &'a [u32],
+    column_cell: &'a [u32],
+    cell_row: &'a [u32],
+    rows: &'a SampleAxis,
+    /// Cells per row.
+    width: usize,
+    step: usize,
+}
+
+impl RowSummer<'_> {
+    /// Adds every `step`-th pixel row whose cell row is one of the rows
+    /// `sums` holds (whole cell rows from `first_row` on) into its cells,
+    /// rows top to bottom.
+    fn sum_band(&self, first_row: usize, sums: &mut [RawSums]) {
+        let (w, h) = (self.cloud.width, self.cloud.height);
+        let band = first_row..first_row + sums.len() / self.width;
+        for v in (0..h).step_by(self.step) {
+            let cell_row = self.cell_row[self.rows.of_pixel[v] as usize] as usize;
+            if !band.contains(&cell_row) {
+                continue;
+            }
+            let base = (cell_row - first_row) * self.width;
+            let row = v * w;
+            for (&cu, &u) in self.column_cell.iter().zip(self.columns) {
+                let i = row + u as usize;
+                let p = &self.cloud.points[i];
+                if !self.keep[i] || !is_measured(p) {
+                    continue;
+                }
+                let (x, y, z) = (f64::from(p.x_m), f64::from(p.y_m), f64::from(p.z_m));
+                let s = &mut sums[base + cu as usize];
+                s[0] += 1.0;
+                s[1] += x;
+                s[2] += y;
+                s[3] += z;
+                s[4] += x * x;
+                s[5] += x * y;
+                s[6] += x * z;
+                s[7] += y * y;
+                s[8] += y * z;
+                s[9] += z * z;
+            }
+        }
+    }
+}
+
 /// What [`CellGrid::load`] needs of the sample grid and the config.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct CellLayout<'a> {
@@ -169,36 +221,78 @@ pub(super) struct CellLayout<'a> {
 
 impl CellGrid {
     /// Sums the kept, measured pixels of `cloud` into their cells and
-    /// decides which cells are planar.
+    /// decides which cells are planar. With a pool the cell rows are cut
+    /// into bands, two per thread, each summed and classified on a worker:
+    /// a cell's sums add its pixels in the same order either way, so they
+    /// are the same bits whatever the thread count.
     pub fn load(
         &mut self,
         cloud: &CloudView<'_>,
         keep: &[bool],
         layout: CellLayout<'_>,
         t: Threshold,
+        pool: Option<&rayon::ThreadPool>,
     ) {
         let CellLayout {
-            k,
-            step,
-            columns,
-            rows,
-            ..
+            k, columns, rows, ..
         } = layout;
         self.columns_of.build(columns.len(), k);
         self.rows_of.build(rows.len(), k);
         self.width = self.columns_of.len();
         self.height = self.rows_of.len();
+        let cells = self.width * self.height;
         self.sums.clear();
-        self.sums.resize(self.width * self.height, [0.0; 10]);
-        let (w, h) = (cloud.width, cloud.height);
-        if self.width == 0 || self.height == 0 {
-            self.planar.clear();
-            self.badness.clear();
+        self.sums.resize(cells, [0.0; 10]);
+        self.planar.clear();
+        self.planar.resize(cells, None);
+        self.badness.clear();
+        self.badness.resize(cells, f64::INFINITY);
+        if cells == 0 {
             return;
         }
-        // Every step-th column counted from the nearer image edge: the
-        // columns summed are symmetric about the image's centre, so the
-        // mirror image of a frame sums the mirror image of its pixels.
+        self.load_columns(cloud.width, layout);
+        let bands = pool.map_or(1, |p| (2 * p.current_num_threads()).min(self.height));
+        let per_band = self.height.div_ceil(bands);
+        let summer = RowSummer {
+            cloud,
+            keep,
+            columns: &self.columns,
+            column_cell: &self.column_cell,
+            cell_row: &self.rows_of.of_sample,
+            rows,
+            width: self.width,
+            step: layout.step,
+        };
+        let chunk = per_band * self.width;
+        let jobs = self
+            .sums
+            .chunks_mut(chunk)
+            .zip(
+                self.planar
+                    .chunks_mut(chunk)
+                    .zip(self.badness.chunks_mut(chunk)),
+            )
+            .enumerate();
+        let band = move |(b, (sums, verdicts)): (usize, (&mut [RawSums], _))| {
+            summer.sum_band(b * per_band, sums);
+            classify(sums, verdicts, layout, t);
+        };
+        match pool {
+            Some(pool) if bands > 1 => pool.scope(|scope| {
+                for job in jobs {
+                    scope.spawn(move |_| band(job));
+                }
+            }),
+            _ => jobs.for_each(band),
+        }
+    }
+
+    /// The pixel columns summed and the cell column of each: every
+    /// `step`-th column counted from the nearer image edge, so that the
+    /// columns summed are symmetric about the image's centre and the
+    /// mirror image of a frame sums the mirror image of its pixels.
+    fn load_columns(&mut self, w: usize, layout: CellLayout<'_>) {
+        let step = layout.step;
         self.columns.clear();
         self.columns.extend(
             (0..w)
@@ -210,51 +304,30 @@ impl CellGrid {
         self.column_cell.extend(
             self.columns
                 .iter()
-                .map(|&u| columns_of[columns.of_pixel[u as usize] as usize]),
+                .map(|&u| columns_of[layout.columns.of_pixel[u as usize] as usize]),
         );
-        for v in (0..h).step_by(step) {
-            let base = self.rows_of.of_sample[rows.of_pixel[v] as usize] as usize * self.width;
-            let row = v * w;
-            for (&cu, &u) in self.column_cell.iter().zip(&self.columns) {
-                let u = u as usize;
-                let i = row + u;
-                let p = &cloud.points[i];
-                if !keep[i] || !is_measured(p) {
-                    continue;
-                }
-                let (x, y, z) = (f64::from(p.x_m), f64::from(p.y_m), f64::from(p.z_m));
-                let s = &mut self.sums[base + cu as usize];
-                s[0] += 1.0;
-                s[1] += x;
-                s[2] += y;
-                s[3] += z;
-                s[4] += x * x;
-                s[5] += x * y;
-                s[6] += x * z;
-                s[7] += y * y;
-                s[8] += y * z;
-                s[9] += z * z;
-            }
-        }
-        self.classify(layout, t);
     }
+}
 
-    /// A cell is planar with at least half its summed pixels measured and
-    /// an RMS within `rms_ratio` of the inlier distance at its centroid.
-    fn classify(&mut self, layout: CellLayout<'_>, t: Threshold) {
-        let side = (layout.k * layout.stride).div_ceil(layout.step);
-        let min_points = ((side * side) as f64 / 2.0).max(3.0);
-        self.planar.clear();
-        self.badness.clear();
-        for s in &self.sums {
-            let plane = (s[0] >= min_points).then(|| SumsPlane::of(s)).flatten();
-            let verdict = plane.and_then(|p| {
-                let limit = layout.rms_ratio * t.at(&p.centroid);
-                let bad = p.mse / (limit * limit);
-                (bad <= 1.0).then_some((p, bad))
-            });
-            self.planar.push(verdict.map(|(p, _)| p));
-            self.badness.push(verdict.map_or(f64::INFINITY, |(_, b)| b));
-        }
+/// Whether each cell of `sums` is planar (`planar`, `badness`: one each
+/// per cell): at least half its summed pixels measured and an RMS within
+/// `rms_ratio` of the inlier distance at its centroid.
+fn classify(
+    sums: &[RawSums],
+    (planar, badness): (&mut [Option<SumsPlane>], &mut [f64]),
+    layout: CellLayout<'_>,
+    t: Threshold,
+) {
+    let side = (layout.k * layout.stride).div_ceil(layout.step);
+    let min_points = ((side * side) as f64 / 2.0).max(3.0);
+    for ((s, planar), badness) in sums.iter().zip(planar).zip(badness) {
+        let plane = (s[0] >= min_points).then(|| SumsPlane::of(s)).flatten();
+        let verdict = plane.and_then(|p| {
+            let limit = layout.rms_ratio * t.at(&p.centroid);
+            let bad = p.mse / (limit * limit);
+            (bad <= 1.0).then_some((p, bad))
+        });
+        *planar = verdict.map(|(p, _)| p);
+        *badness = verdict.map_or(f64::INFINITY, |(_, b)| b);
     }
 }

@@ -120,7 +120,7 @@ impl PlaneProposal for ConfiguredCells<'_> {
             step: config.cell_point_step_px.max(1),
             rms_ratio: config.cell_rms_ratio,
         };
-        p.grid.load(cloud, keep, layout, t);
+        p.grid.load(cloud, keep, layout, t, cells.workers);
         let step2 = (layout.step * layout.step) as f64;
         let min_points = ransac.min_plane_points as f64 / step2;
         let cos_merge = config.merge_angle_deg.to_radians().cos();

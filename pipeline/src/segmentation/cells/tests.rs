@@ -205,3 +205,63 @@ fn cells_group_sample_cells_from_both_ends_as_their_own_mirror_image() {
         }
     }
 }
+
+/// The cells summed in bands on 2 and 3 threads have the sums, planes and
+/// verdicts of the one-thread load, bit for bit; and every kept,
+/// measured pixel on the summed rows and columns is counted once.
+#[test]
+fn banded_cell_sums_are_the_one_thread_sums_bit_for_bit() {
+    use super::grid::{CellGrid, CellLayout};
+    use crate::cloud::is_measured;
+    use crate::ransac_planes::SampleAxis;
+    let mut cloud = SceneCloud::render(&stairs(4, 0.17, 0.28), 512, 424, 0.004, 5);
+    for p in cloud.points.iter_mut().step_by(29) {
+        p.z_m = f32::NAN;
+    }
+    let keep: Vec<bool> = (0..cloud.points.len()).map(|i| i % 13 != 0).collect();
+    let (mut columns, mut rows) = (SampleAxis::default(), SampleAxis::default());
+    columns.build(512, 4);
+    rows.build(424, 4);
+    let layout = CellLayout {
+        columns: &columns,
+        rows: &rows,
+        stride: 4,
+        k: 2,
+        step: 2,
+        rms_ratio: 0.5,
+    };
+    let t = Threshold::of(&RansacConfig::default());
+    let load = |pool: Option<&rayon::ThreadPool>| {
+        let mut grid = CellGrid::default();
+        grid.load(&cloud.view(), &keep, layout, t, pool);
+        let sums: Vec<Vec<u64>> = grid
+            .sums
+            .iter()
+            .map(|s| s.iter().map(|x| x.to_bits()).collect())
+            .collect();
+        let planar: Vec<_> = grid
+            .planar
+            .iter()
+            .map(|p| p.map(|p| (p.normal.map(f64::to_bits), p.d.to_bits())))
+            .collect();
+        let badness: Vec<u64> = grid.badness.iter().map(|b| b.to_bits()).collect();
+        (sums, planar, badness)
+    };
+    let one = load(None);
+    let w = 512usize;
+    let on_grid = |u: usize| u.min(w - 1 - u).is_multiple_of(2);
+    let summed = (0..cloud.points.len())
+        .filter(|&i| (i / w).is_multiple_of(2) && on_grid(i % w))
+        .filter(|&i| keep[i] && is_measured(&cloud.points[i]))
+        .count();
+    let counted: f64 = one.0.iter().map(|s| f64::from_bits(s[0])).sum();
+    assert_eq!(counted, summed as f64);
+    assert!(one.1.iter().filter(|p| p.is_some()).count() > 100);
+    for threads in [2, 3] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("a thread pool");
+        assert!(load(Some(&pool)) == one, "{threads} threads");
+    }
+}
