@@ -463,16 +463,25 @@ impl Estimator {
         estimate
     }
 
-    /// What the selection needs of every segmented plane.
+    /// What the selection needs of every segmented plane: with a pool,
+    /// the planes' summaries on its threads (each plane's alone, collected
+    /// in plane order: the same summaries).
     fn summarize_planes(&mut self, cloud: &CloudView<'_>) {
+        use rayon::prelude::*;
         let threshold = Threshold::of(&self.config.ransac);
         let noise = self.config.selection.noise_model.unwrap_or_default();
+        let planes = segmented(&self.segmenter, &self.every_point, &self.config);
+        let summary = |p: &SegmentedPlane| PlaneSummary::of(cloud, p, &threshold, noise);
         self.summaries.clear();
-        self.summaries.extend(
-            segmented(&self.segmenter, &self.every_point, &self.config)
-                .iter()
-                .map(|p| PlaneSummary::of(cloud, p, &threshold, noise)),
-        );
+        match self.pool.as_deref() {
+            Some(pool) if planes.len() > 1 => pool.install(|| {
+                planes
+                    .par_iter()
+                    .map(summary)
+                    .collect_into_vec(&mut self.summaries)
+            }),
+            _ => self.summaries.extend(planes.iter().map(summary)),
+        }
     }
 }
 

@@ -143,16 +143,34 @@ impl PlaneSegmenter {
     }
 
     /// Per coarse cell, the distinct planes of the 3x3 cells around it, in
-    /// the order of [`cell_neighbourhood`] (row by row).
+    /// the order of [`cell_neighbourhood`] (row by row); with workers, in
+    /// bands of cell rows on their threads (each cell's own: the same sets).
     fn fill_cell_candidates(&mut self) {
         let (cw, ch) = (self.sample.coarse_w, self.sample.coarse_h);
         self.cell_candidates.clear();
-        self.cell_candidates.reserve(cw * ch);
-        for cv in 0..ch {
-            for cu in 0..cw {
-                let set = self.candidates_of(cu, cv);
-                self.cell_candidates.push(set);
+        self.cell_candidates.resize(cw * ch, ([NO_PLANE; 9], 0));
+        if cw == 0 || ch == 0 {
+            return;
+        }
+        let pool = self.workers.as_deref();
+        let bands = pool.map_or(1, |p| (2 * p.current_num_threads()).min(ch));
+        let rows = ch.div_ceil(bands);
+        let labels = &self.cell_plane[..];
+        let fill = move |(b, sets): (usize, &mut [([u16; 9], u8)])| {
+            for (r, row) in sets.chunks_mut(cw).enumerate() {
+                for (cu, set) in row.iter_mut().enumerate() {
+                    *set = candidates_in(labels, (cw, ch), cu, b * rows + r);
+                }
             }
+        };
+        let jobs = self.cell_candidates.chunks_mut(rows * cw).enumerate();
+        match pool {
+            Some(pool) if bands > 1 => pool.scope(|scope| {
+                for job in jobs {
+                    scope.spawn(move |_| fill(job));
+                }
+            }),
+            _ => jobs.for_each(fill),
         }
     }
 
@@ -160,18 +178,8 @@ impl PlaneSegmenter {
     /// row.
     #[inline]
     fn candidates_of(&self, cu: usize, cv: usize) -> ([u16; 9], u8) {
-        let (cw, ch) = (self.sample.coarse_w, self.sample.coarse_h);
-        let (rows, columns) = neighbourhood_span(cu, cv, cw, ch);
-        let mut set = ([NO_PLANE; 9], 0u8);
-        for r in rows {
-            for &k in &self.cell_plane[r * cw..][columns.clone()] {
-                if k != NO_PLANE && !set.0[..set.1 as usize].contains(&k) {
-                    set.0[set.1 as usize] = k;
-                    set.1 += 1;
-                }
-            }
-        }
-        set
+        let dims = (self.sample.coarse_w, self.sample.coarse_h);
+        candidates_in(&self.cell_plane, dims, cu, cv)
     }
 
     /// The labelling pass proper: each kept, measured pixel to the nearest
@@ -217,6 +225,23 @@ impl PlaneSegmenter {
             plane.pixel_box = (!pixel_box.is_empty()).then_some(pixel_box);
         }
     }
+}
+
+/// The distinct planes of `labels` (a `cw x ch` grid of sample cells) in
+/// the 3x3 cells around cell `(cu, cv)`, row by row.
+#[inline]
+fn candidates_in(labels: &[u16], (cw, ch): (usize, usize), cu: usize, cv: usize) -> ([u16; 9], u8) {
+    let (rows, columns) = neighbourhood_span(cu, cv, cw, ch);
+    let mut set = ([NO_PLANE; 9], 0u8);
+    for r in rows {
+        for &k in &labels[r * cw..][columns.clone()] {
+            if k != NO_PLANE && !set.0[..set.1 as usize].contains(&k) {
+                set.0[set.1 as usize] = k;
+                set.1 += 1;
+            }
+        }
+    }
+    set
 }
 
 /// Image rows per band of the labelling pass: fixed, so that the sums are
