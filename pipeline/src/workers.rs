@@ -7,8 +7,8 @@
 //! near the waker, often the caller's own, busy one; the worker then waits
 //! there for the scheduler to move it to the idle CPU, and the caller has
 //! done most of the work by then. On this project's 2-CPU virtual machine
-//! two unbound threads took 0.92-1.08x the latency of one; bound, 0.72-0.94x
-//! (BENCHMARKS.md, "Threads"). A bound worker stays on its CPU: other busy
+//! two unbound threads take 0.85-1.11x the latency of one; bound,
+//! 0.66-0.83x (BENCHMARKS.md, "Threads"). A bound worker stays on its CPU: other busy
 //! processes bound to the same CPUs slow it, which `pin_threads = false`
 //! (or a systemd `CPUAffinity=` that gives the service CPUs of its own)
 //! avoids. Only the pool's threads are bound, never the caller's.
