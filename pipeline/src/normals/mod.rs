@@ -68,12 +68,12 @@
 //!
 //! One concern per file: `window_table.rs` (the summed-area tables and the
 //! window search), `window_pass.rs` (each member's window and normal, in
-//! chunks on the worker threads when there are workers),
-//! `window_cache.rs` (one eigenvector per distinct window), `support.rs` (the support's bounds and centre, walked
-//! once, by the pass-through when it runs first), `tree.rs` (the k-d tree
-//! fallback), `eigen.rs` (the windows' eigenvector solver), `ray_noise.rs`
-//! (the optional noise correction), `grid.rs` (the coarse normals that gate
-//! RANSAC), `config.rs` ([`NormalsConfig`]).
+//! chunks on the worker threads when there are workers), `window_cache.rs`
+//! (one eigenvector per distinct window), `support.rs` (the support's
+//! bounds and centre, walked once, by the pass-through when it runs first),
+//! `tree.rs` (the k-d tree fallback), `eigen.rs` (the windows' eigenvector
+//! solver), `ray_noise.rs` (the optional noise correction), `grid.rs` (the
+//! coarse normals that gate RANSAC), `config.rs` ([`NormalsConfig`]).
 
 use nalgebra::Vector3;
 
