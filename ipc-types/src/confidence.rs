@@ -26,8 +26,19 @@ pub const CLOSE_CHOICE: u32 = 1 << 6;
 /// ramp): it may stand on the ground out of sight, or not.
 pub const FOOT_HIDDEN: u32 = 1 << 7;
 
+/// The road's surface is too small to measure its slope well (narrower than
+/// 0.2 m across the corridor, under 1,500 pixels or under 0.03 square
+/// metres: a post, a table leg): its role and distance hold, its slope is a
+/// guess (confidence at most 0.3).
+pub const SMALL_SURFACE: u32 = 1 << 8;
+
+/// The floor the camera sees disagrees with the configured mount (tilted
+/// beyond the parallel tolerance, or off the mount's height): the robot may
+/// stand tilted, or the mount's figures are wrong.
+pub const MOUNT_MISMATCH: u32 = 1 << 9;
+
 /// Every reason with its name, in bit order.
-pub const ALL: [(u32, &str); 8] = [
+pub const ALL: [(u32, &str); 10] = [
     (FEW_POINTS, "few_points"),
     (ROUGH_PLANE, "rough_plane"),
     (SMALL_AREA, "small_area"),
@@ -36,6 +47,8 @@ pub const ALL: [(u32, &str); 8] = [
     (METHODS_DISAGREE, "methods_disagree"),
     (CLOSE_CHOICE, "close_choice"),
     (FOOT_HIDDEN, "foot_hidden"),
+    (SMALL_SURFACE, "small_surface"),
+    (MOUNT_MISMATCH, "mount_mismatch"),
 ];
 
 /// The names of the reasons set in `bits`, in bit order; a bit this build

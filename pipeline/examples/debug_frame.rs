@@ -127,8 +127,8 @@ fn print_planes(
         let (u0, v0, u1, v1) = pixel_bbox(&planes[i], view.width);
         let q = &s.quality;
         println!(
-            "plane {i}: n [{:+.4} {:+.4} {:+.4}] d {:.3} inliers {} rms {:.4} rel {:.2} noise {:.1} area {:.2} border {:.2} centroid [{:.2} {:.2} {:.2}] up-angle {:.2} bbox u {u0}..{u1} v {v0}..{v1}",
-            s.plane.normal.x, s.plane.normal.y, s.plane.normal.z, s.plane.d, s.inliers, q.rms_m, q.relative_rms, q.noise_ratio, q.area_m2, q.border_fraction,
+            "plane {i}: n [{:+.4} {:+.4} {:+.4}] d {:.3} inliers {} rms {:.4} rel {:.2} noise {:.1} area {:.2} border {:.2} veil {:.2} centroid [{:.2} {:.2} {:.2}] up-angle {:.2} bbox u {u0}..{u1} v {v0}..{v1}",
+            s.plane.normal.x, s.plane.normal.y, s.plane.normal.z, s.plane.d, s.inliers, q.rms_m, q.relative_rms, q.noise_ratio, q.area_m2, q.border_fraction, q.veil_fraction,
             s.centroid.x, s.centroid.y, s.centroid.z,
             up.map_or(f64::NAN, |u| angle_between_deg(&s.plane.normal, &u))
         );

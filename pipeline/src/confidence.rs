@@ -14,6 +14,8 @@
 //! | `methods_disagree` | paper method and TLS differ by more than 1 degree | `max(1 / difference, 0.2)` |
 //! | `close_choice` | another ramp or wall at a different slope lies in the corridor within `road.close_choice_m` behind the road | 0.7 |
 //! | `foot_hidden` | the road's foot is hidden behind something nearer | 0.7 |
+//! | `mount_mismatch` | the floor seen (the nearest, `selection::mount_disagrees`) is not parallel to the ground the mount chose, or not at the mount's height | 0.7 |
+//! | `small_surface` | the road's surface is narrower than 0.2 m, under 1,500 pixels or under 0.03 m^2 ([`is_small_surface`]) | at most 0.3 in all |
 //!
 //! A planner may gate on the value (e.g. `>= 0.5`) and log the reasons.
 
@@ -119,14 +121,57 @@ pub const CLOSE_CHOICE_FACTOR: f64 = 0.7;
 /// The factor of a road whose foot is hidden (`foot_hidden`).
 pub const FOOT_HIDDEN_FACTOR: f64 = 0.7;
 
-/// `c` lowered for how the road was chosen (`selection/road.rs`): another
-/// candidate at a different slope close behind it, or its foot hidden.
-pub fn with_road_choice(mut c: Confidence, close_choice: bool, foot_hidden: bool) -> Confidence {
-    if close_choice {
+/// A road narrower than this across the corridor is a small surface,
+/// metres (a post, a table leg: too narrow to measure a slope on).
+pub const SMALL_SURFACE_WIDTH_M: f64 = 0.2;
+/// A road with fewer pixels than this is a small surface.
+pub const SMALL_SURFACE_PIXELS: usize = 1500;
+/// A road covering less than this is a small surface, square metres.
+pub const SMALL_SURFACE_AREA_M2: f64 = 0.03;
+/// The most a small surface's confidence can be.
+pub const SMALL_SURFACE_CAP: f64 = 0.3;
+
+/// True when a road surface `width_m` wide across the corridor (its lateral
+/// extent), of `pixels` inliers covering `area_m2`, is too small to measure
+/// its slope well. Its role and distance hold (a post in the path is an
+/// obstacle); its confidence says so.
+pub fn is_small_surface(width_m: f64, pixels: usize, area_m2: f64) -> bool {
+    !(width_m >= SMALL_SURFACE_WIDTH_M)
+        || pixels < SMALL_SURFACE_PIXELS
+        || !(area_m2 >= SMALL_SURFACE_AREA_M2)
+}
+
+/// The factor of an estimate whose floor disagrees with the mount
+/// (`mount_mismatch`).
+pub const MOUNT_MISMATCH_FACTOR: f64 = 0.7;
+
+/// How the road was chosen and what it is (`selection/road.rs`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct RoadChoice {
+    /// The floor seen disagrees with the mount (`selection::mount_disagrees`).
+    pub mount_mismatch: bool,
+    /// Another candidate at a different slope lies close behind it.
+    pub close_choice: bool,
+    /// Its foot is hidden behind something nearer.
+    pub foot_hidden: bool,
+    /// Its surface is too small to measure well ([`is_small_surface`]).
+    pub small_surface: bool,
+}
+
+/// `c` lowered for how the road was chosen and what it is.
+pub fn with_road_choice(mut c: Confidence, road: RoadChoice) -> Confidence {
+    if road.close_choice {
         c.lower(reason::CLOSE_CHOICE, CLOSE_CHOICE_FACTOR);
     }
-    if foot_hidden {
+    if road.foot_hidden {
         c.lower(reason::FOOT_HIDDEN, FOOT_HIDDEN_FACTOR);
+    }
+    if road.mount_mismatch {
+        c.lower(reason::MOUNT_MISMATCH, MOUNT_MISMATCH_FACTOR);
+    }
+    if road.small_surface {
+        c.value = c.value.min(SMALL_SURFACE_CAP);
+        c.reasons |= reason::SMALL_SURFACE;
     }
     c
 }
@@ -149,6 +194,7 @@ mod tests {
                 area_m2,
                 border_fraction: border,
                 noise_ratio: 1.2,
+                veil_fraction: 0.0,
             },
         }
     }

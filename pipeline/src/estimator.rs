@@ -22,7 +22,7 @@ use slope_ipc_types::{EstimateStatus, SlopeMethod};
 
 use crate::baseline::baseline_fit;
 use crate::cloud::{is_measured, CloudView};
-use crate::confidence::{with_road_choice, Confidence};
+use crate::confidence::{is_small_surface, with_road_choice, Confidence, RoadChoice};
 use crate::config::{EstimatorConfig, NormalsConfig, PassThroughConfig};
 use crate::cosine_kmeans::CosineKmeans;
 use crate::cumulative_angle::{cumulative_angle, rotation_axis};
@@ -38,8 +38,8 @@ use crate::plane_fit::Plane;
 use crate::ransac_planes::{SegmentedPlane, Threshold};
 use crate::segmentation::Segmentation;
 use crate::selection::{
-    chosen_segments, select_ground, survey_surfaces, Ground, PlaneSegment, PlaneSummary, RoadScene,
-    Selection, SurveyInput,
+    chosen_segments, mount_disagrees, select_ground, survey_surfaces, Ground, PlaneSegment,
+    PlaneSummary, RoadScene, Selection, SurveyInput,
 };
 use crate::statistical_outlier::StatisticalOutlierFilter;
 use crate::tracking::{FrameSlope, SlopeTracker, StreamPosition};
@@ -117,6 +117,9 @@ pub struct Estimator {
     roles: Roles,
     /// The last frame's surfaces and road (moved into its estimate).
     scene: Option<RoadScene>,
+    /// The last frame's floor disagreed with the mount
+    /// ([`mount_disagrees`]).
+    mount_mismatch: bool,
     /// With `threads` > 1: the worker threads, made once with the
     /// estimator (clones share them).
     pool: Option<Arc<rayon::ThreadPool>>,
@@ -132,6 +135,7 @@ impl Estimator {
             knn_outlier: KnnOutlierFilter::new(),
             every_point: EveryPointRansac::new(),
             summaries: Vec::new(),
+            mount_mismatch: false,
             ground_pixels: Vec::new(),
             paper: PaperStages::default(),
             tracker: SlopeTracker::new(),
@@ -305,14 +309,22 @@ impl Estimator {
         let (Some(road), Some(surface)) = (scene.road, scene.road_surface()) else {
             return;
         };
-        let hidden = scene.heights_known && surface.support == SurfaceSupport::Hidden;
+        let choice = RoadChoice {
+            mount_mismatch: self.mount_mismatch,
+            close_choice: road.close_choice,
+            foot_hidden: scene.heights_known && surface.support == SurfaceSupport::Hidden,
+            small_surface: is_small_surface(
+                surface.right_m - surface.left_m,
+                surface.inliers,
+                surface.area_m2,
+            ),
+        };
         let c = with_road_choice(
             Confidence {
                 value: estimate.confidence,
                 reasons: estimate.confidence_reasons,
             },
-            road.close_choice,
-            hidden,
+            choice,
         );
         (estimate.confidence, estimate.confidence_reasons) = (c.value, c.reasons);
     }
@@ -352,12 +364,12 @@ impl Estimator {
     fn select_ground(&mut self, cloud: &CloudView<'_>) -> Option<Ground> {
         self.summarize_planes(cloud);
         let mount_up = cloud.mount.up_vector().map(Vector3::from);
-        select_ground(
-            &self.summaries,
-            mount_up,
-            Some(cloud.mount.height_m),
-            &self.config.selection,
-        )
+        let height = Some(cloud.mount.height_m);
+        let ground = select_ground(&self.summaries, mount_up, height, &self.config.selection);
+        self.mount_mismatch = ground.as_ref().is_some_and(|g| {
+            mount_disagrees(&self.summaries, g, mount_up, height, &self.config.selection)
+        });
+        ground
     }
 
     /// Every surface over `ground` (into `self.scene`) and the road among

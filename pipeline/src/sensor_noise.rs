@@ -13,6 +13,20 @@
 //!   the error grows with the square of the depth (disparity quantisation).
 //!
 //! `theta` is clamped to 89° (both formulas diverge at 90°).
+//!
+//! **Range bias.** Beside its noise, a real depth sensor bends a flat floor:
+//! a plane fitted to a piece of the floor seen far away is tilted against
+//! the floor seen near, and lies a little above or below it. Each model
+//! states how far, as bounds that grow with depth ([`NoiseModel::floor_bend_deg`],
+//! [`NoiseModel::floor_height_bias_m`]). The selection joins a level piece
+//! within these bounds to the ground instead of calling it a step or a ramp,
+//! and a ramp must be tilted beyond the bend at its distance. Measured on the
+//! real frames of `shared/data` (the pipeline README, "Range bias", gives the
+//! figures and the commands): a Kinect v2 floor's pieces 0.6-1.9 degrees
+//! apart and within 2 cm of the near floor to 4.5 m; Kinect v1 (structured
+//! light) pieces up to 3.6 degrees at 2 m and 4.3 at 3 m and beyond, within
+//! 2 cm to 5.5 m and 6 cm at 6.5 m. `slope-synth` simulates a Kinect v2 with
+//! no bias unless told (`--range-bias`).
 
 use std::f64::consts::FRAC_PI_2;
 
@@ -65,6 +79,45 @@ impl NoiseModel {
             Self::Kinect2 => (0.5, 8.0),
             Self::Kinect1 => (0.4, 10.0),
         }
+    }
+
+    /// The largest angle between a piece of a flat floor whose centre lies
+    /// `z_m` metres ahead of the camera (along the optical axis) and the
+    /// floor seen near, degrees: the range bias's bend plus the tilt that
+    /// the sensor's depth structure (Kinect v1's disparity terraces) gives
+    /// a small piece's plane.
+    ///
+    /// - Kinect v2: `1.0 + 0.3 z` (1.3 at 1 m, 2.2 at 4 m): the real
+    ///   Kinect v2 floors' pieces lie 0.6-1.9 apart.
+    /// - Kinect v1: `4.0` up to 3 m, then `4.0 + 0.5 (z - 3)`: pieces 2.2-3.6
+    ///   from their floor at 2-3 m, up to 4.3 beyond.
+    pub fn floor_bend_deg(self, z_m: f64) -> f64 {
+        let z = z_m.max(0.0);
+        match self {
+            Self::Kinect2 => 1.0 + 0.3 * z,
+            Self::Kinect1 => 4.0 + 0.5 * (z - 3.0).max(0.0),
+        }
+    }
+
+    /// How far above or below the near floor's plane a flat floor seen
+    /// `z_m` metres ahead may lie, metres (the median height of the floor's
+    /// points at that depth): Kinect v2 `0.005 z` (5 mm a metre), Kinect v1
+    /// `0.01 z`.
+    pub fn floor_height_bias_m(self, z_m: f64) -> f64 {
+        let z = z_m.max(0.0);
+        match self {
+            Self::Kinect2 => 0.005 * z,
+            Self::Kinect1 => 0.01 * z,
+        }
+    }
+
+    /// How far a flat floor's point seen `z_m` metres ahead (its extremes
+    /// among a piece's points) may lie from the near floor's plane, metres:
+    /// the height bias and two standard deviations of the noise at the
+    /// point (taken at a grazing 75 degrees, the floor a few metres ahead
+    /// of a camera a metre up).
+    pub fn floor_band_m(self, z_m: f64) -> f64 {
+        self.floor_height_bias_m(z_m) + 2.0 * self.sigma_m(z_m, 75f64.to_radians())
     }
 
     /// One standard deviation of the depth error at depth `z_m` and

@@ -125,8 +125,10 @@ fn a_new_stream_does_not_inherit_the_tracked_slope() {
 /// z^2) of shallow ramps: the median over frames stays within 0.2 degrees of
 /// the truth. (The upward bias of unsigned pair angles, which the angles
 /// about the rotation axis remove, is shown on normals with a 3 degree
-/// spread in `cumulative_angle.rs`; a 3 degree ramp is within the parallel
-/// tolerance of 4 degrees and reported as `no_inclined_plane`.)
+/// spread in `cumulative_angle.rs`.) A 3 degree ramp is beyond the Kinect
+/// v2's floor bend where it lies (`sensor_noise.rs`: 2.2 degrees at 4 m)
+/// and measured; a 1.5 degree one is within it and reported as
+/// `no_inclined_plane`.
 #[test]
 fn small_angles_stay_within_0_2_deg_on_noisy_frames() {
     let mut est = Estimator::new(EstimatorConfig::default());
@@ -145,13 +147,19 @@ fn small_angles_stay_within_0_2_deg_on_noisy_frames() {
         println!("{truth} deg: median {median:.3} over 5 frames");
         assert!((median - truth).abs() < 0.2, "{truth}: {median}");
     }
-    let cloud = SceneCloud::render(
-        &Scene::ramp_at(3.0, 1.5, 0.5, -20.0, 0.0),
-        512,
-        424,
-        0.006,
-        0,
-    );
-    let e = est.estimate_frame(&cloud.view(), frame(9));
+    let mut gentle = |truth: f64, index: u64| {
+        let cloud = SceneCloud::render(
+            &Scene::ramp_at(truth, 1.5, 0.5, -20.0, 0.0),
+            512,
+            424,
+            0.006,
+            0,
+        );
+        est.estimate_frame(&cloud.view(), frame(index))
+    };
+    let e = gentle(3.0, 9);
+    assert_eq!(e.status, EstimateStatus::Ok, "{e:?}");
+    assert!((e.slope_deg - 3.0).abs() < 0.3, "{}", e.slope_deg);
+    let e = gentle(1.5, 10);
     assert_eq!(e.status, EstimateStatus::NoInclinedPlane, "{e:?}");
 }

@@ -29,6 +29,8 @@ CONFIDENCE_REASONS = [
     "methods_disagree",
     "close_choice",
     "foot_hidden",
+    "small_surface",
+    "mount_mismatch",
 ]
 # HealthComponent values (`Health.component`).
 COMPONENT_NAMES = {1: "estimator", 2: "capture", 3: "replay"}

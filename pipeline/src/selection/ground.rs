@@ -1,14 +1,16 @@
 //! The ground: the support surface the robot stands on.
 //!
-//! 1. **Level candidates** are flat planes (see [`super::is_flat`]) whose
+//! 1. **Level candidates** are flat planes (see [`super::is_flat`], or
+//!    flat at the sensor's noise level: [`is_flat_for_ground`]) whose
 //!    normal is within `ground_max_tilt_deg` (mount) or
 //!    `unmounted_ground_max_tilt_deg` (no mount) of the reference up.
 //! 2. **The ground's family**: with a mount, the candidate whose normal is
-//!    closest to the mount's up; without one, the candidate with the most
-//!    pixels in the bottom third of the image (the floor right in front of
-//!    the robot). Every candidate parallel to it (`parallel_tolerance_deg`)
-//!    is in its family: floor, treads, table and bed tops; a shallow ramp
-//!    is not.
+//!    closest to the mount's up; without one, the nearest floor: the
+//!    candidate large enough to be the ground (step 4's size) whose inliers
+//!    reach lowest in the image ([`nearest_floor`]), the surface that
+//!    continues under the robot, however large a ramp beyond it. Every
+//!    candidate parallel to it (`parallel_tolerance_deg`) is in its family:
+//!    floor, treads, table and bed tops; a ramp is not.
 //! 3. **Known mount height**: a family member's centroid must lie within
 //!    `ground_height_tolerance_m` of the mount height below the camera.
 //!    None does: the mount's plane is the ground (`ground_from_mount`).
@@ -19,15 +21,24 @@
 //! 5. **The ground's segments**: RANSAC may cut one slightly bent real floor
 //!    into pieces a few centimetres apart, differently from draw to draw.
 //!    Family members coplanar with a segment of the ground (each one's
-//!    centroid within `coplanar_tolerance_m` of the other's plane) are
+//!    centroid within `coplanar_tolerance_m` of the other's plane, their
+//!    normals within the sensor's floor bend: a gentle ramp is not) are
 //!    segments too, and the ground is measured on all of them together: the
-//!    same floor whichever piece RANSAC found first.
+//!    same floor whichever piece RANSAC found first. (Pieces of the floor
+//!    that the sensor's range bias bends further join the ground's surface
+//!    later, by their heights: `floor.rs`.)
 
 use nalgebra::Vector3;
 
 use super::SelectionConfig;
 use super::{is_flat, PlaneSummary};
 use crate::cloud::angle_between_deg;
+
+/// A level plane whose RMS is at most this many standard deviations of the
+/// sensor's noise is flat enough to be the ground even when it fills its
+/// RANSAC band (a Kinect v1 floor 3 m away, whose noise is as wide as the
+/// band): what the sensor cannot tell from flat is flat.
+pub const GROUND_NOISE_RATIO: f64 = 1.5;
 
 /// The ground as chosen: the lowest plane and every segment of it.
 #[derive(Debug, Clone, PartialEq)]
@@ -47,7 +58,7 @@ pub fn choose_ground(
     config: &SelectionConfig,
 ) -> Option<Ground> {
     let level = level_candidates(planes, reference, mounted, config);
-    let Some(anchor) = family_anchor(planes, &level, reference, mounted) else {
+    let Some(anchor) = family_anchor(planes, &level, reference, mounted, config) else {
         return mounted.then_some(Ground::Mount);
     };
     let up = planes[anchor].plane.normal;
@@ -72,18 +83,65 @@ fn level_candidates(
         config.unmounted_ground_max_tilt_deg
     };
     (0..planes.len())
-        .filter(|&k| is_flat(&planes[k], config) && tilt_deg(&planes[k], reference) <= max_tilt)
+        .filter(|&k| {
+            is_flat_for_ground(&planes[k], config) && tilt_deg(&planes[k], reference) <= max_tilt
+        })
         .collect()
 }
 
+/// The ground's flatness: flat within its RANSAC band ([`is_flat`]), or
+/// flat at the sensor's noise level (at most [`GROUND_NOISE_RATIO`]).
+pub fn is_flat_for_ground(plane: &PlaneSummary, config: &SelectionConfig) -> bool {
+    is_flat(plane, config)
+        || (super::is_surface(plane) && plane.quality.noise_ratio <= GROUND_NOISE_RATIO)
+}
+
+/// The nearest floor among the `level` candidates: among those large
+/// enough to be the ground whose inliers reach within
+/// [`NEAREST_ROWS_SHARE`] of the image's height of the lowest row any of
+/// them reaches ([`PlaneSummary::lowest_row`]), the one with the most
+/// pixels in the bottom third of the image (ties: the lowest index). A
+/// narrow patch of floor between a person's legs reaches as low as the
+/// floor around it; a ramp ahead starts higher in the image than the floor
+/// before it, however large it is.
+pub fn nearest_floor(
+    planes: &[PlaneSummary],
+    level: &[usize],
+    config: &SelectionConfig,
+) -> Option<usize> {
+    let large: Vec<usize> = level
+        .iter()
+        .copied()
+        .filter(|&k| large_enough(&planes[k], config))
+        .collect();
+    let lowest = large
+        .iter()
+        .map(|&k| planes[k].lowest_row)
+        .max_by(f64::total_cmp)?;
+    large
+        .into_iter()
+        .filter(|&k| planes[k].lowest_row + NEAREST_ROWS_SHARE >= lowest)
+        .max_by(|&a, &b| {
+            planes[a]
+                .bottom_pixels
+                .cmp(&planes[b].bottom_pixels)
+                .then(b.cmp(&a))
+        })
+}
+
+/// Level candidates whose inliers reach this share of the image's height
+/// from the lowest row reached are all "the nearest floor".
+pub const NEAREST_ROWS_SHARE: f64 = 0.1;
+
 /// Step 2, the plane that sets the ground family's up: with a mount the
-/// level plane nearest the reference up, without one the level plane with
-/// the most pixels in the bottom third of the image (ties: lowest index).
+/// level plane nearest the reference up, without one the nearest floor
+/// ([`nearest_floor`]).
 fn family_anchor(
     planes: &[PlaneSummary],
     level: &[usize],
     reference: &Vector3<f64>,
     mounted: bool,
+    config: &SelectionConfig,
 ) -> Option<usize> {
     let tilt = |k: usize| tilt_deg(&planes[k], reference);
     if mounted {
@@ -92,12 +150,7 @@ fn family_anchor(
             .copied()
             .min_by(|&a, &b| tilt(a).total_cmp(&tilt(b)))
     } else {
-        level.iter().copied().max_by(|&a, &b| {
-            planes[a]
-                .bottom_pixels
-                .cmp(&planes[b].bottom_pixels)
-                .then(b.cmp(&a))
-        })
+        nearest_floor(planes, level, config)
     }
 }
 
@@ -135,11 +188,13 @@ fn lowest_member(
     family
         .iter()
         .copied()
-        .filter(|&k| {
-            planes[k].inliers >= config.ground_min_pixels
-                && planes[k].quality.area_m2 >= config.ground_min_area_m2
-        })
+        .filter(|&k| large_enough(&planes[k], config))
         .max_by(|&a, &b| depth(a).total_cmp(&depth(b)).then(b.cmp(&a)))
+}
+
+/// At least `ground_min_pixels` pixels and `ground_min_area_m2` of surface.
+fn large_enough(plane: &PlaneSummary, config: &SelectionConfig) -> bool {
+    plane.inliers >= config.ground_min_pixels && plane.quality.area_m2 >= config.ground_min_area_m2
 }
 
 /// Step 5, the connected level of the ground `g`: family members join
@@ -173,9 +228,17 @@ fn depth_below(plane: &PlaneSummary, up: &Vector3<f64>) -> f64 {
     -up.dot(&plane.centroid)
 }
 
-/// Each plane's centroid within `coplanar_tolerance_m` of the other plane.
+/// Each plane's centroid within `coplanar_tolerance_m` of the other plane,
+/// and their normals within the sensor's floor bend at the deeper
+/// centroid (a gentle ramp's near half is close to the floor's plane, but
+/// tilted beyond the bend).
 fn coplanar(a: &PlaneSummary, b: &PlaneSummary, config: &SelectionConfig) -> bool {
     let tol = config.coplanar_tolerance_m;
+    let bend = config
+        .noise_model
+        .unwrap_or_default()
+        .floor_bend_deg(a.centroid.z.max(b.centroid.z));
     a.plane.signed_distance(&b.centroid).abs() <= tol
         && b.plane.signed_distance(&a.centroid).abs() <= tol
+        && angle_between_deg(&a.plane.normal, &b.plane.normal) <= bend
 }

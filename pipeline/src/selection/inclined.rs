@@ -5,10 +5,10 @@
 //! that is not part of
 //! the ground and
 //!
-//! - is inclined: its normal is more than `parallel_tolerance_deg` from the
-//!   ground's (closer planes are parallel: treads, tables, the ground
-//!   itself; one tolerance decides "parallel" and "inclined", so no plane
-//!   is both) and at most `max_slope_deg` from it: a surface whose normal
+//! - is inclined: its normal is more than the sensor's floor bend at its
+//!   centroid's depth (`sensor_noise.rs`, range bias) from the ground's
+//!   (closer planes are the floor as the sensor bends it, or parallel to
+//!   it) and at most `max_slope_deg` from it: a surface whose normal
 //!   points further down faces the floor (a ceiling, an overhang, the
 //!   underside of a table) and is never a slope;
 //! - faces along the robot's way: the horizontal part of its normal is
@@ -69,13 +69,17 @@ pub fn is_inclined_candidate(
     config: &SelectionConfig,
 ) -> bool {
     let cos_heading = config.max_heading_deg.to_radians().cos();
+    let bend = config
+        .noise_model
+        .unwrap_or_default()
+        .floor_bend_deg(p.centroid.z);
     let n = p.plane.normal;
     let angle = angle_between_deg(&n, up);
     let horizontal = n - up * n.dot(up);
     let h = horizontal.norm();
     is_flat_at_noise_level(p, config)
         && p.quality.area_m2 >= config.inclined_min_area_m2
-        && angle > config.parallel_tolerance_deg
+        && angle > bend
         && angle <= config.max_slope_deg
         && h > 1e-9
         && horizontal.dot(forward).abs() >= cos_heading * h

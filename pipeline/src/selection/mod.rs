@@ -32,6 +32,7 @@
 //! (`quality.rs`).
 
 mod config;
+pub mod floor;
 pub mod ground;
 mod ground_frame;
 mod hidden_foot;
@@ -74,6 +75,11 @@ pub struct PlaneSummary {
     pub inliers: usize,
     /// Inlier pixels in the bottom third of the image's rows.
     pub bottom_pixels: usize,
+    /// How far down the image its lowest inliers reach, as a share of the
+    /// image's rows (0 top, 1 bottom): the row of the inlier a hundredth of
+    /// them from the last (stray pixels do not count); 0 for a plane
+    /// without inliers.
+    pub lowest_row: f64,
     pub centroid: Vector3<f64>,
     pub quality: PlaneQuality,
 }
@@ -108,16 +114,38 @@ impl PlaneSummary {
                 - plane
                     .inliers
                     .partition_point(|&i| (i as usize) < bottom_start),
+            lowest_row: lowest_row(&plane.inliers, cloud.width, cloud.height),
             centroid: plane.centroid,
             quality: plane_quality(cloud, &plane.plane, &plane.inliers, threshold, noise),
         }
     }
 }
 
-/// True when the plane is flat within its RANSAC band: it does not fill the
-/// band evenly (the test every plane passes, ground segments included).
+/// The row of the inlier a hundredth of `inliers` (pixel indices in pixel
+/// order) from the last, as a share of `height` rows; 0 without inliers.
+fn lowest_row(inliers: &[u32], width: usize, height: usize) -> f64 {
+    let rank = inliers.len().saturating_sub(1 + inliers.len() / 100);
+    inliers.get(rank).map_or(0.0, |&i| {
+        (i as usize / width.max(1)) as f64 / height.saturating_sub(1).max(1) as f64
+    })
+}
+
+/// At most this share of a surface's inliers are veil points (mixed
+/// readings along a depth edge, `quality::is_veil_point`): a plane made
+/// mostly of them (the streak of readings between a person's legs and the
+/// floor behind) is no surface.
+pub const MAX_VEIL_FRACTION: f64 = 0.5;
+
+/// True when the plane is a surface at all: not made mostly of veil points.
+pub fn is_surface(plane: &PlaneSummary) -> bool {
+    plane.quality.veil_fraction <= MAX_VEIL_FRACTION
+}
+
+/// True when the plane is a surface flat within its RANSAC band: it does
+/// not fill the band evenly (the test every plane passes, ground segments
+/// included).
 pub fn is_flat(plane: &PlaneSummary, config: &SelectionConfig) -> bool {
-    plane.quality.relative_rms <= config.max_relative_rms
+    is_surface(plane) && plane.quality.relative_rms <= config.max_relative_rms
 }
 
 /// True when the plane is flat at the sensor's noise level as well (the
@@ -138,6 +166,52 @@ pub fn select_ground(
     let reference = mount_up.unwrap_or(-Vector3::y());
     let height = mount_height_m.filter(|h| h.is_finite() && *h > 0.0 && mount_up.is_some());
     ground::choose_ground(planes, &reference, height, mount_up.is_some(), config)
+}
+
+/// True when a mount is known and the floor the data shows disagrees with
+/// the ground chosen by it: the nearest floor ([`ground::nearest_floor`]
+/// among the flat planes within `unmounted_ground_max_tilt_deg` of the
+/// mount's up) is not parallel (`parallel_tolerance_deg`) to the ground's
+/// up (the mount's own, for a ground from the mount), or, with a known
+/// mount height, lies further than `ground_height_tolerance_m` from it.
+/// The robot may be tilted on its mount, or the mount's figures wrong: the
+/// estimate's confidence says so (`mount_mismatch`) instead of picking
+/// silently.
+pub fn mount_disagrees(
+    planes: &[PlaneSummary],
+    ground: &Ground,
+    mount_up: Option<Vector3<f64>>,
+    mount_height_m: Option<f64>,
+    config: &SelectionConfig,
+) -> bool {
+    let Some(mount_up) = mount_up.and_then(|u| u.try_normalize(1e-12)) else {
+        return false;
+    };
+    let level: Vec<usize> = (0..planes.len())
+        .filter(|&k| {
+            ground::is_flat_for_ground(&planes[k], config)
+                && crate::cloud::angle_between_deg(&planes[k].plane.normal, &mount_up)
+                    <= config.unmounted_ground_max_tilt_deg
+        })
+        .collect();
+    let Some(floor) = ground::nearest_floor(planes, &level, config) else {
+        return false;
+    };
+    let floor = &planes[floor];
+    let up = match ground {
+        Ground::Planes(members) => match members.first().and_then(|&k| planes.get(k)) {
+            Some(lowest) => lowest.plane.normal,
+            None => return false,
+        },
+        Ground::Mount => mount_up,
+    };
+    let tilted =
+        crate::cloud::angle_between_deg(&floor.plane.normal, &up) > config.parallel_tolerance_deg;
+    let height = mount_height_m.filter(|h| h.is_finite() && *h > 0.0);
+    let off_height = height.is_some_and(|h| {
+        (-mount_up.dot(&floor.centroid) - h).abs() > config.ground_height_tolerance_m
+    });
+    tilted || off_height
 }
 
 /// Chooses ground and inclined plane from the planes' summaries alone:

@@ -35,6 +35,9 @@ pub struct PlaneQuality {
     /// incidence): about 1 for a flat surface seen by that sensor, more for
     /// a surface that is not flat at the sensor's noise level.
     pub noise_ratio: f64,
+    /// Share of the inlier pixels that are veil points: mixed readings
+    /// between a near and a far surface (see [`is_veil_point`]).
+    pub veil_fraction: f64,
 }
 
 /// The quality of `plane` over its `inliers` (pixel indices of `cloud`).
@@ -68,11 +71,44 @@ pub fn plane_quality(
         let (u, v) = (pixel % w, pixel / w);
         let at_border = u < BORDER_PX || v < BORDER_PX || u + BORDER_PX >= w || v + BORDER_PX >= h;
         sums.add(plane, &p, threshold.at(&p), at_border, focal_area, noise);
+        sums.veil += usize::from(is_veil_point(cloud, pixel, p.z));
     }
     let mut quality = sums.quality();
     // The sampled footprints stand for all inliers.
     quality.area_m2 *= inliers.len() as f64 / sums.count.max(1) as f64;
     quality
+}
+
+/// A veil point's local surface is seen at more than this incidence
+/// (degrees): the depth jumps to both of its neighbours along a row or a
+/// column by more than `tan(VEIL_INCIDENCE_DEG)` pixel footprints. A real
+/// floor is seen at 81 degrees 8 m ahead of a camera 1.3 m up, a ramp
+/// falling away from a camera 0.5 m up at up to 86; the jumps between a
+/// person's legs and the floor behind are tens of centimetres a pixel.
+pub const VEIL_INCIDENCE_DEG: f64 = 88.0;
+
+/// True when the reading at `pixel` (depth `z`) is a veil point: a mixed
+/// reading between a near and a far surface, whose depth jumps to both
+/// neighbours along its row or its column (each jump steeper than
+/// [`VEIL_INCIDENCE_DEG`]). A surface's edge pixel jumps on one side only;
+/// a neighbour without a reading (or out of the image) is no jump.
+pub fn is_veil_point(cloud: &CloudView<'_>, pixel: usize, z: f64) -> bool {
+    let w = cloud.width;
+    let focal = cloud.focal_px();
+    if w == 0 || !(focal > 0.0) {
+        return false;
+    }
+    let jump = VEIL_INCIDENCE_DEG.to_radians().tan() * z / focal;
+    let steep = |q: Option<usize>| {
+        q.and_then(|q| cloud.points.get(q))
+            .is_some_and(|n| n.z_m.is_finite() && (f64::from(n.z_m) - z).abs() > jump)
+    };
+    let (u, v) = (pixel % w, pixel / w);
+    let left = u.checked_sub(1).map(|_| pixel - 1);
+    let right = (u + 1 < w).then_some(pixel + 1);
+    let up = v.checked_sub(1).map(|_| pixel - w);
+    let down = (v + 1 < cloud.height).then_some(pixel + w);
+    (steep(left) && steep(right)) || (steep(up) && steep(down))
 }
 
 /// The figures are taken over at most about this many inliers, evenly
@@ -94,6 +130,7 @@ pub(crate) struct PooledQuality {
     squared_noise: f64,
     area_m2: f64,
     border_pixels: f64,
+    veil_pixels: f64,
 }
 
 impl PooledQuality {
@@ -106,6 +143,7 @@ impl PooledQuality {
         self.squared_noise += quality.noise_ratio.powi(2) * n;
         self.area_m2 += quality.area_m2;
         self.border_pixels += quality.border_fraction * n;
+        self.veil_pixels += quality.veil_fraction * n;
     }
 
     /// The quality of the planes added, `pixels` pixels in all (counted as
@@ -118,6 +156,7 @@ impl PooledQuality {
             area_m2: self.area_m2,
             border_fraction: self.border_pixels / n,
             noise_ratio: (self.squared_noise / n).sqrt(),
+            veil_fraction: self.veil_pixels / n,
         }
     }
 }
@@ -130,6 +169,7 @@ struct Sums {
     area_m2: f64,
     at_border: usize,
     squared_noise: f64,
+    veil: usize,
 }
 
 impl Sums {
@@ -166,6 +206,7 @@ impl Sums {
                 area_m2: 0.0,
                 border_fraction: 0.0,
                 noise_ratio: f64::NAN,
+                veil_fraction: 0.0,
             };
         }
         let n = self.count as f64;
@@ -175,6 +216,7 @@ impl Sums {
             area_m2: self.area_m2,
             border_fraction: self.at_border as f64 / n,
             noise_ratio: (self.squared_noise / n).sqrt(),
+            veil_fraction: self.veil as f64 / n,
         }
     }
 }

@@ -27,7 +27,12 @@
 //!    the robot or to a side, not one falling away) is a `ramp` or `wall`
 //!    whose support is `hidden`: it may stand on the ground out of sight.
 //!    Only surfaces that could be the road (flat at the noise level and
-//!    large enough) are looked at.
+//!    large enough) are looked at. A surface resting on furniture (its
+//!    lowest inlier at or above an `elevated` level surface's height, less
+//!    `join_tolerance_m`, its footprint overlapping that surface's: pillows
+//!    on a bed, a box on a table, a board rising behind a desk) is not: it
+//!    stays `elevated`. A ramp seen under a table's top, below its height,
+//!    does not rest on it, and its foot may be hidden by it.
 //! 6. **`elevated`**: everything else: a surface that joins neither the
 //!    ground nor a step (a table, a bed, a shelf, a board): never the road.
 //!
@@ -61,14 +66,26 @@ pub fn assign_roles(
         }
     }
     join_in_rounds(surfaces, selection, road);
+    let furniture: Vec<Furniture> = surfaces
+        .iter()
+        .filter(|s| {
+            s.role == SurfaceRole::Elevated && s.tilt_deg() <= selection.parallel_tolerance_deg
+        })
+        .map(|s| Furniture {
+            ahead: (s.distance_m, s.far_m),
+            lateral: (s.left_m, s.right_m),
+            height_m: 0.5 * (s.lowest_m + s.highest_m),
+        })
+        .collect();
     for s in surfaces.iter_mut() {
         if s.role != SurfaceRole::Elevated || s.support != SurfaceSupport::None {
             continue;
         }
-        // Only a surface that could be the road (flat and large enough)
-        // is worth the look.
+        // Only a surface that could be the road (flat and large enough),
+        // not resting on furniture, is worth the look.
         if kind(s) == Kind::Inclined
             && s.measurable
+            && !rests_on(s, &furniture, road.join_tolerance_m)
             && foot_is_hidden(
                 cloud,
                 &planes[s.plane_index].inliers,
@@ -84,10 +101,38 @@ pub fn assign_roles(
     }
 }
 
+/// A level surface that stands on nothing seen (a table, a bed, a desk
+/// top): its footprint (forward and lateral extents) and its height above
+/// the ground, metres.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Furniture {
+    ahead: (f64, f64),
+    lateral: (f64, f64),
+    height_m: f64,
+}
+
+/// True when `s` rests on a piece of `furniture`: its lowest inlier is at
+/// or above the furniture's height (less `tol_m`) and its footprint overlaps
+/// the furniture's (within `tol_m`).
+fn rests_on(s: &Surface, furniture: &[Furniture], tol_m: f64) -> bool {
+    let overlaps =
+        |(a0, a1): (f64, f64), (b0, b1): (f64, f64)| a0 <= b1 + tol_m && b0 <= a1 + tol_m;
+    furniture.iter().any(|f| {
+        s.lowest_m >= f.height_m - tol_m
+            && overlaps((s.distance_m, s.far_m), f.ahead)
+            && overlaps((s.left_m, s.right_m), f.lateral)
+    })
+}
+
 /// What a surface's tilt makes it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Kind {
+    /// Within the sensor's floor bend at its distance: level.
     Level,
+    /// Beyond the floor bend but within `parallel_tolerance_deg`: a gentle
+    /// ramp where it rises out of the surface it meets, else a level
+    /// surface (a tread a little tilted).
+    Gentle,
     Inclined,
     FacingDown,
 }
@@ -95,14 +140,24 @@ enum Kind {
 impl Kind {
     fn of(s: &Surface, selection: &SelectionConfig) -> Self {
         let tilt = s.tilt_deg();
-        if tilt <= selection.parallel_tolerance_deg {
+        let bend = floor_bend_at(s, selection);
+        if tilt <= bend.min(selection.parallel_tolerance_deg) {
             Kind::Level
+        } else if tilt <= selection.parallel_tolerance_deg {
+            Kind::Gentle
         } else if tilt <= selection.max_slope_deg {
             Kind::Inclined
         } else {
             Kind::FacingDown
         }
     }
+}
+
+/// The sensor's floor bend (`sensor_noise.rs`) at the middle of `s`'s
+/// forward extent, degrees: a ramp is tilted beyond it.
+pub fn floor_bend_at(s: &Surface, selection: &SelectionConfig) -> f64 {
+    let noise = selection.noise_model.unwrap_or_default();
+    noise.floor_bend_deg(0.5 * (s.distance_m + s.far_m))
 }
 
 /// A surface something else can stand on: its height band and footprint.
@@ -178,6 +233,7 @@ fn join_in_rounds(surfaces: &mut [Surface], selection: &SelectionConfig, road: &
             };
             s.role = match Kind::of(s, selection) {
                 Kind::Level => SurfaceRole::Step,
+                Kind::Gentle if !rises_from(s, &on, road) => SurfaceRole::Step,
                 _ => inclined_role(s, road),
             };
             s.support = match on.role {
@@ -216,19 +272,31 @@ fn meets(s: &Surface, u: &Support, selection: &SelectionConfig, road: &RoadConfi
     if u.role != SurfaceRole::Ground && u.gap_to(s) > road.max_step_rise_m + tol {
         return false;
     }
-    match (Kind::of(s, selection), u.role) {
-        (Kind::Level, SurfaceRole::Ramp) => {
-            let h = 0.5 * (s.lowest_m + s.highest_m);
-            (h - u.highest_m).abs() <= tol || (h - u.lowest_m).abs() <= tol
-        }
-        (Kind::Level, _) => {
-            let rise = 0.5 * (s.lowest_m + s.highest_m) - u.level_height();
-            rise.abs() <= road.max_step_rise_m + tol
-        }
-        (Kind::Inclined, SurfaceRole::Ground | SurfaceRole::Step) => {
-            let h = u.level_height();
-            s.lowest_m - h <= tol && s.highest_m - h >= -tol
-        }
-        _ => false,
+    match Kind::of(s, selection) {
+        Kind::Level => meets_as_level(s, u, road),
+        Kind::Gentle => rises_from(s, u, road) || meets_as_level(s, u, road),
+        Kind::Inclined => rises_from(s, u, road),
+        Kind::FacingDown => false,
     }
+}
+
+/// A level `s` meets `u`: a ramp's top or bottom edge at its height, or a
+/// rise from a level `u` of at most `max_step_rise_m`.
+fn meets_as_level(s: &Surface, u: &Support, road: &RoadConfig) -> bool {
+    let tol = road.join_tolerance_m;
+    let h = 0.5 * (s.lowest_m + s.highest_m);
+    if u.role == SurfaceRole::Ramp {
+        return (h - u.highest_m).abs() <= tol || (h - u.lowest_m).abs() <= tol;
+    }
+    (h - u.level_height()).abs() <= road.max_step_rise_m + tol
+}
+
+/// An inclined `s` rises from (or falls to) the level `u` (the ground or a
+/// step): its inliers reach `u`'s height within `join_tolerance_m`.
+fn rises_from(s: &Surface, u: &Support, road: &RoadConfig) -> bool {
+    let tol = road.join_tolerance_m;
+    let h = u.level_height();
+    matches!(u.role, SurfaceRole::Ground | SurfaceRole::Step)
+        && s.lowest_m - h <= tol
+        && s.highest_m - h >= -tol
 }

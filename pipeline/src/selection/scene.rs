@@ -4,6 +4,7 @@
 use nalgebra::Vector3;
 use slope_ipc_types::{SurfaceRole, SurfaceSupport};
 
+use super::floor::floor_pieces;
 use super::{
     assign_roles, choose_road, describe_surfaces, Ground, GroundFrame, PlaneSummary, Road,
     RoadConfig, SelectionConfig, Surface,
@@ -75,15 +76,26 @@ pub fn survey_surfaces(
         }
     };
     let heights_known = frame.ground.d.is_finite();
-    let mut surfaces = describe_surfaces(
-        input.cloud,
-        input.planes,
-        input.summaries,
-        members,
-        &frame,
-        selection,
-        road,
-    );
+    let describe = |members: &[usize]| {
+        describe_surfaces(
+            input.cloud,
+            input.planes,
+            input.summaries,
+            members,
+            &frame,
+            selection,
+            road,
+        )
+    };
+    let mut surfaces = describe(members);
+    let noise = selection.noise_model.unwrap_or_default();
+    let pieces = floor_pieces(&surfaces, noise, road);
+    if !pieces.is_empty() {
+        // One floor, one surface: the pieces join the ground's segments.
+        let mut joined = members.to_vec();
+        joined.extend(pieces.iter().map(|&k| surfaces[k].plane_index));
+        surfaces = describe(&joined);
+    }
     if heights_known {
         assign_roles(
             &mut surfaces,
@@ -118,7 +130,7 @@ fn assume_inclined_surfaces_stand(
         let tilt = s.tilt_deg();
         if tilt > selection.max_slope_deg {
             s.role = SurfaceRole::Overhang;
-        } else if tilt > selection.parallel_tolerance_deg {
+        } else if tilt > super::roles::floor_bend_at(s, selection) {
             s.role = if tilt <= road.max_ramp_deg {
                 SurfaceRole::Ramp
             } else {

@@ -116,7 +116,8 @@ impl std::fmt::Display for Surface {
 
 /// The surfaces of every plane in `planes` over `frame`: the ground's
 /// segments (`ground`, lowest first; empty for a ground from the mount)
-/// joined into the first, then every other plane in index order. Roles are
+/// joined into the first, then every other plane in index order but those
+/// made of veil points ([`super::is_surface`]). Roles are
 /// left `Elevated` and supports `None` for `roles.rs` to set (the ground's
 /// role is `Ground`).
 pub fn describe_surfaces(
@@ -155,7 +156,8 @@ pub fn describe_surfaces(
         surfaces.push(s);
     }
     for (k, plane) in planes.iter().enumerate() {
-        if ground.contains(&k) {
+        // A plane of veil points is no surface at all.
+        if ground.contains(&k) || !super::is_surface(&summaries[k]) {
             continue;
         }
         let mut s = describe(cloud, &[&plane.inliers], &plane.plane, frame, road);

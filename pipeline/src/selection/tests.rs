@@ -5,6 +5,7 @@ use nalgebra::Vector3;
 use super::*;
 use crate::cloud::angle_between_deg;
 use crate::fixtures::Scene;
+use crate::sensor_noise::NoiseModel;
 
 /// A flat plane summary for surface `k` of `scene`, seen in the camera
 /// frame, with `pixels` inliers (a third of them in the bottom third of the
@@ -22,6 +23,7 @@ fn summary(scene: &Scene, k: usize, pixels: usize, area_m2: f64) -> PlaneSummary
         plane,
         inliers: pixels,
         bottom_pixels: if k == 0 { pixels / 3 } else { 0 },
+        lowest_row: if k == 0 { 1.0 } else { 0.0 },
         centroid: c + ahead * 0.5,
         quality: PlaneQuality {
             rms_m: 0.002,
@@ -29,6 +31,7 @@ fn summary(scene: &Scene, k: usize, pixels: usize, area_m2: f64) -> PlaneSummary
             area_m2,
             border_fraction: 0.0,
             noise_ratio: 1.2,
+            veil_fraction: 0.0,
         },
     }
 }
@@ -38,6 +41,7 @@ fn summary(scene: &Scene, k: usize, pixels: usize, area_m2: f64) -> PlaneSummary
 fn raised(scene: &Scene, height_m: f64, pixels: usize, area_m2: f64) -> PlaneSummary {
     let mut s = summary(scene, 0, pixels, area_m2);
     s.bottom_pixels = 0;
+    s.lowest_row = 0.0;
     let up = s.plane.normal;
     s.plane.d -= height_m;
     s.centroid += up * height_m;
@@ -204,7 +208,9 @@ fn ramp_behind_a_spoilt_copy(
     ]
 }
 
-/// A rough surface (relative RMS 0.55) is neither ground nor inclined plane.
+/// A rough surface (relative RMS 0.55) is neither ground nor inclined plane;
+/// a floor that fills its band only as wide as the sensor's noise (1.2
+/// deviations: a Kinect v1 floor 3 m away) is the ground all the same.
 #[test]
 fn rough_surfaces_are_not_planes() {
     let scene = Scene::ramp(30.0);
@@ -213,9 +219,32 @@ fn rough_surfaces_are_not_planes() {
     assert_eq!(sel.inclined, 2);
     let mut rough_floor = planes.clone();
     rough_floor[0].quality.relative_rms = 0.55;
+    rough_floor[0].quality.noise_ratio = 2.0;
     rough_floor.truncate(1);
     assert_eq!(
         select_planes(&rough_floor, None, None, &config()),
+        Err(EstimateStatus::NoGround)
+    );
+    rough_floor[0].quality.noise_ratio = ground::GROUND_NOISE_RATIO;
+    assert_eq!(
+        select_planes(&rough_floor, None, None, &config()),
+        Err(EstimateStatus::NoInclinedPlane)
+    );
+}
+
+/// A plane made mostly of veil points (mixed readings along a depth edge)
+/// is no surface: neither ground nor inclined plane.
+#[test]
+fn veil_planes_are_not_surfaces() {
+    let scene = Scene::ramp(30.0);
+    let planes = ramp_behind_a_spoilt_copy(&scene, |p| p.quality.veil_fraction = 0.6);
+    let sel = select_planes(&planes, mount_up(&scene), None, &config()).unwrap();
+    assert_eq!(sel.inclined, 2);
+    let mut veil_floor = planes.clone();
+    veil_floor[0].quality.veil_fraction = 0.6;
+    veil_floor.truncate(1);
+    assert_eq!(
+        select_planes(&veil_floor, None, None, &config()),
         Err(EstimateStatus::NoGround)
     );
 }
@@ -289,16 +318,26 @@ fn the_nearest_inclined_plane_has_a_quarter_of_the_best_support() {
     }
 }
 
-/// One tolerance makes "parallel" and "inclined": a plane 3.9 degrees off the
-/// ground is neither part of it nor a slope; 4.1 degrees is a slope.
+/// The sensor's floor bend at a plane's depth makes "level" and "inclined":
+/// a plane 0.1 degrees inside the Kinect v2's bend at its centroid is no
+/// slope, 0.1 degrees beyond it is (a 3.9 degree ramp is a slope).
 #[test]
-fn parallel_and_inclined_do_not_overlap() {
-    for (slope, expected) in [(3.9, Err(EstimateStatus::NoInclinedPlane)), (4.1, Ok(1))] {
+fn the_floor_bend_at_its_depth_makes_a_plane_inclined() {
+    let depth = summary(&Scene::ramp(3.0), 1, 6000, 0.5).centroid.z;
+    let bend = NoiseModel::Kinect2.floor_bend_deg(depth);
+    assert!(bend > 1.0 && bend < 3.0, "{bend} at {depth} m");
+    for (slope, expected) in [
+        (bend - 0.1, Err(EstimateStatus::NoInclinedPlane)),
+        (bend + 0.1, Ok(1)),
+        (3.9, Ok(1)),
+    ] {
         let scene = Scene::ramp(slope);
         let planes = vec![
             summary(&scene, 0, 30_000, 1.0),
             summary(&scene, 1, 6000, 0.5),
         ];
+        // The ramp's centroid moves little with its slope.
+        assert!((planes[1].centroid.z - depth).abs() < 0.05);
         let sel = select_planes(&planes, mount_up(&scene), None, &config());
         assert_eq!(sel.map(|s| s.inclined), expected, "{slope}");
     }
