@@ -213,3 +213,59 @@ fn refusals_name_the_frame_and_why() {
     let err = DepthFrame::from_recording(&flat, 3).expect_err("one frame only");
     assert!(err.to_string().contains("no frame 3"), "{err}");
 }
+
+#[test]
+fn the_program_writes_a_bent_recording_and_refuses_a_short_floor() {
+    let (src_dir, _flat) = clean(&{
+        let mut s = flat_scene();
+        s.mount.pitch_deg = -25.0;
+        s
+    });
+    // Two frames: both bent.
+    let two = tempfile::tempdir().expect("temp dir");
+    write_and_open(&flat_scene(), &SensorModel::clean(), 2, 0, two.path());
+    let out_root = tempfile::tempdir().expect("temp dir");
+    let out = out_root.path().join("ramp8");
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_slope-bend"))
+        .arg(two.path())
+        .args(["--angle-deg", "8", "--hinge-m", "1.5", "-q", "-o"])
+        .arg(&out)
+        .output()
+        .expect("runs");
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let rec = Recording::open(&out).expect("the bent recording opens");
+    assert_eq!(rec.frames().len(), 2);
+    assert_eq!(rec.meta().truth.slope_deg, Some(8.0));
+    assert!(out.join("bend.toml").is_file());
+
+    // The floor of a camera 0.8 m up ends at the image's top long before 60 m.
+    let refused = out_root.path().join("refused");
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_slope-bend"))
+        .arg(src_dir.path())
+        .args(["--angle-deg", "5", "--hinge-m", "80", "-o"])
+        .arg(&refused)
+        .output()
+        .expect("runs");
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success());
+    assert!(
+        stderr.contains(&src_dir.path().display().to_string())
+            && stderr.contains("does not reach past the hinge at 80 m"),
+        "{stderr}"
+    );
+    assert!(!refused.exists(), "nothing written for a refused frame");
+
+    let help = std::process::Command::new(env!("CARGO_BIN_EXE_slope-bend"))
+        .arg("--help")
+        .output()
+        .expect("runs");
+    let text = String::from_utf8_lossy(&help.stdout);
+    assert!(
+        text.contains("Examples:") && text.contains("--angle-deg"),
+        "{text}"
+    );
+}

@@ -162,8 +162,8 @@ mod tests {
     use super::*;
 
     fn hinge(angle_deg: f64) -> Hinge {
-        // A camera 0.8 m up, pitched 20° down: up = (0, -cos 20°, sin 20°)... as the spec says
-        // (pitch -20): up = (-sin r cos p, -cos r cos p, sin p).
+        // A camera 0.8 m up, pitched 20° down (p = -20°, r = 0): the spec's
+        // up = (-sin r cos p, -cos r cos p, sin p).
         let p = (-20f64).to_radians();
         let floor = FloorPlane {
             up: [0.0, -p.cos(), p.sin()],
