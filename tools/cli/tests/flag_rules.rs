@@ -1,8 +1,10 @@
 //! One voice: every slope program follows the flag rules of
 //! `slope_tools::flag_rules` (-v/-q, -o/--output, --max-frames refusing 0
 //! with one message, negative angles). A program added to `src/bin/` must
-//! be listed here, so a new tool that breaks the rules fails too.
-//! (slope-bridge is checked in its own crate, with the zenoh feature.)
+//! be listed here, so a new tool that breaks the rules fails too; so must
+//! the programs of slope-synth (`slope-synth`, `slope-bend`), checked in
+//! `every_synth_program_is_checked`. (slope-bridge is checked in its own
+//! crate, with the zenoh feature.)
 
 use clap::{Command, CommandFactory};
 use slope_tools::flag_rules::violations;
@@ -18,6 +20,7 @@ fn commands() -> Vec<Command> {
         slope_tools::record::RecordArgs::command(),
         slope_tools::replay::ReplayArgs::command(),
         slope_synth::Args::command(),
+        slope_synth::bend::cli::BendArgs::command(),
     ];
     #[cfg(feature = "kinect2")]
     all.push(slope_tools::capture::CaptureArgs::command());
@@ -54,6 +57,33 @@ fn every_program_is_checked() {
         );
     }
     assert!(programs >= 8, "{programs} programs in {bin_dir}");
+}
+
+/// slope-synth's programs (its `[[bin]]`s) are in `commands()` too.
+#[test]
+fn every_synth_program_is_checked() {
+    let checked: Vec<String> = commands()
+        .iter()
+        .map(|c| c.get_name().to_string())
+        .collect();
+    let manifest = concat!(env!("CARGO_MANIFEST_DIR"), "/../synth/Cargo.toml");
+    let text = std::fs::read_to_string(manifest).expect("tools/synth/Cargo.toml");
+    let table: toml::Table = text.parse().expect("a TOML manifest");
+    let bins = table
+        .get("bin")
+        .and_then(|b| b.as_array())
+        .expect("[[bin]] entries");
+    for bin in bins {
+        let name = bin
+            .get("name")
+            .and_then(|n| n.as_str())
+            .expect("a bin's name");
+        assert!(
+            checked.iter().any(|c| c == name),
+            "{name} (tools/synth) is not in commands(): add it"
+        );
+    }
+    assert!(bins.len() >= 2, "{} programs in {manifest}", bins.len());
 }
 
 /// The rules in action on the programs themselves.

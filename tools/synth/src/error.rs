@@ -77,3 +77,82 @@ pub enum WriteError {
         source: RecordingError,
     },
 }
+
+/// Why a real frame's floor could not be bent into a ramp
+/// ([`crate::bend::bend_floor`], `slope-bend`).
+#[derive(Debug, thiserror::Error)]
+pub enum BendError {
+    /// A bend parameter is out of range.
+    #[error("{name} = {value}: {reason}")]
+    InvalidParameter {
+        name: &'static str,
+        value: f64,
+        reason: &'static str,
+    },
+
+    /// The source recording could not be read.
+    #[error("reading recording {}", dir.display())]
+    Read {
+        dir: PathBuf,
+        #[source]
+        source: RecordingError,
+    },
+
+    /// The recording has no frame of that number.
+    #[error("{}: no frame {frame} (the recording has {frames})", dir.display())]
+    NoSuchFrame {
+        dir: PathBuf,
+        frame: usize,
+        frames: usize,
+    },
+
+    /// The frame's images disagree with its `[depth]` size.
+    #[error("{origin}: {reason}")]
+    BadFrame { origin: String, reason: String },
+
+    /// No floor plane was found (too few up-facing points in the lower image,
+    /// or none that RANSAC could gather into a plane below the camera).
+    #[error("{origin}: no floor found: {reason}")]
+    NoFloor { origin: String, reason: String },
+
+    /// A floor was found, but it does not reach past the hinge line.
+    #[error(
+        "{origin}: the floor does not reach past the hinge at {hinge_m} m: {beyond} floor points \
+         beyond it (at least {needed} needed), the floor reaches {reach_m:.2} m ahead; \
+         give a smaller --hinge-m"
+    )]
+    FloorShort {
+        origin: String,
+        hinge_m: f64,
+        reach_m: f64,
+        beyond: usize,
+        needed: usize,
+    },
+
+    /// The floor is first seen beyond the hinge line: none of it would stay
+    /// as the ground in front of the ramp.
+    #[error(
+        "{origin}: no floor before the hinge at {hinge_m} m: {before} floor points before it \
+         (at least {needed} needed), the floor is first seen {from_m:.2} m ahead; \
+         give a larger --hinge-m"
+    )]
+    NoGroundBeforeHinge {
+        origin: String,
+        hinge_m: f64,
+        from_m: f64,
+        before: usize,
+        needed: usize,
+    },
+
+    /// The camera looks straight down the floor's normal: no forward direction.
+    #[error("{origin}: the camera looks along the floor's normal; no forward direction to put a hinge across")]
+    NoForward { origin: String },
+
+    /// The bent recording could not be written.
+    #[error("writing recording {}", dir.display())]
+    Write {
+        dir: PathBuf,
+        #[source]
+        source: RecordingError,
+    },
+}

@@ -22,6 +22,8 @@
 //! - `shading.rs`: a colour image registered to the depth image.
 //! - `recording.rs`: frames, poses, seeds and the recording on disk.
 //! - `cli.rs`: the command line and [`run`].
+//! - `bend/`: real frames' floors bent into ramps of known angle
+//!   ([`bend::bend_floor`], the program `slope-bend`).
 //!
 //! ```no_run
 //! use slope_synth::{write_recording, Scene, SensorModel};
@@ -30,6 +32,7 @@
 //! # Ok::<(), slope_synth::WriteError>(())
 //! ```
 
+pub mod bend;
 pub mod bump_field;
 pub mod camera;
 pub mod cli;
@@ -46,7 +49,7 @@ pub mod world;
 
 pub use camera::{Camera, CameraPose};
 pub use cli::{run, Args};
-pub use error::{SceneError, WriteError};
+pub use error::{BendError, SceneError, WriteError};
 pub use geometry::{BoxFace, Surface, SurfaceKind};
 pub use raycast::{raycast, GeometryImage, PixelHit};
 pub use recording::{
