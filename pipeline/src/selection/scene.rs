@@ -19,6 +19,10 @@ pub struct RoadScene {
     /// The ground first (when a ground plane was seen), then every other
     /// plane in segmentation order.
     pub surfaces: Vec<Surface>,
+    /// The segmented planes the ground's surface is made of: its coplanar
+    /// segments (the ground measured), then the floor pieces joined to it
+    /// (`floor.rs`); empty for a ground from the mount.
+    pub ground_planes: Vec<usize>,
     pub road: Option<Road>,
     /// True when heights above the ground are known (a ground plane was
     /// seen, or the mount's height is known).
@@ -90,11 +94,11 @@ pub fn survey_surfaces(
     let mut surfaces = describe(members);
     let noise = selection.noise_model.unwrap_or_default();
     let pieces = floor_pieces(&surfaces, noise, road);
+    let mut ground_planes = members.to_vec();
     if !pieces.is_empty() {
         // One floor, one surface: the pieces join the ground's segments.
-        let mut joined = members.to_vec();
-        joined.extend(pieces.iter().map(|&k| surfaces[k].plane_index));
-        surfaces = describe(&joined);
+        ground_planes.extend(pieces.iter().map(|&k| surfaces[k].plane_index));
+        surfaces = describe(&ground_planes);
     }
     if heights_known {
         assign_roles(
@@ -112,6 +116,7 @@ pub fn survey_surfaces(
     Some(RoadScene {
         frame,
         surfaces,
+        ground_planes,
         road: chosen,
         heights_known,
         corridor_half_width_m: road.corridor_half_width_m,

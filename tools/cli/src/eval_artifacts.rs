@@ -42,11 +42,20 @@ impl Snapshot<'_> {
     pub fn role(&self, k: usize) -> Role {
         if self.inspection.inclined == Some(k) {
             Role::Inclined
-        } else if self.inspection.ground.contains(&k) {
+        } else if self.inspection.ground.contains(&k) || self.ground_planes().contains(&k) {
             Role::Ground
         } else {
             Role::Other
         }
+    }
+
+    /// The planes of the ground's surface: its segments and the floor
+    /// pieces joined to it (none without a scene).
+    fn ground_planes(&self) -> &[usize] {
+        self.estimate
+            .scene
+            .as_ref()
+            .map_or(&[], |scene| scene.ground_planes.as_slice())
     }
 
     /// The file name of an artifact with `extension`.
@@ -156,12 +165,13 @@ pub fn overlay_of(s: &Snapshot<'_>) -> ColorImage {
     })
 }
 
-/// A surface's pixels (the ground's: every segment's) and its label: role
-/// and slope (the ground's slope, 0 by definition, is left out).
+/// A surface's pixels (the ground's: every segment's and floor piece's)
+/// and its label: role and slope (the ground's slope, 0 by definition, is
+/// left out).
 fn surface_pixels<'a>(s: &Snapshot<'a>, surface: &Surface) -> SurfacePixels<'a> {
     let planes = s.inspection.planes;
     let indices: Vec<usize> = if surface.role == SurfaceRole::Ground && surface.segments > 1 {
-        s.inspection.ground.to_vec()
+        s.ground_planes().to_vec()
     } else {
         vec![surface.plane_index]
     };
