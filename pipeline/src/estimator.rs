@@ -38,8 +38,8 @@ use crate::plane_fit::Plane;
 use crate::ransac_planes::{SegmentedPlane, Threshold};
 use crate::segmentation::Segmentation;
 use crate::selection::{
-    chosen_segments, mount_disagrees, select_ground, survey_surfaces, Ground, PlaneSegment,
-    PlaneSummary, RoadScene, Selection, SurveyInput,
+    chosen_segments, mount_disagrees, road_pieces, select_ground, survey_surfaces, Ground,
+    PlaneSegment, PlaneSummary, RoadScene, Selection, SurveyInput,
 };
 use crate::statistical_outlier::StatisticalOutlierFilter;
 use crate::tracking::{FrameSlope, SlopeTracker, StreamPosition};
@@ -112,6 +112,8 @@ pub struct Estimator {
     summaries: Vec<PlaneSummary>,
     /// Inlier pixels of every segment of the ground, in pixel order.
     ground_pixels: Vec<u32>,
+    /// Inlier pixels of every piece of the road's surface, in pixel order.
+    inclined_pixels: Vec<u32>,
     paper: PaperStages,
     tracker: SlopeTracker,
     roles: Roles,
@@ -137,6 +139,7 @@ impl Estimator {
             summaries: Vec::new(),
             mount_mismatch: false,
             ground_pixels: Vec::new(),
+            inclined_pixels: Vec::new(),
             paper: PaperStages::default(),
             tracker: SlopeTracker::new(),
             roles: Roles::default(),
@@ -190,6 +193,14 @@ impl Estimator {
         let mut estimate = self.run(cloud, 0, &mut clock);
         estimate.timings = clock.finish();
         estimate
+    }
+
+    /// True when the last frame's floor disagreed with its mount
+    /// ([`mount_disagrees`]: the nearest floor seen tilted against the
+    /// ground the mount chose, or off the mount's height). Its `ok`
+    /// estimate says so too (`mount_mismatch`); a daemon warns in health.
+    pub fn mount_mismatch(&self) -> bool {
+        self.mount_mismatch
     }
 
     /// Estimates the slope in frame `frame` of a stream. The random draws
@@ -264,6 +275,7 @@ impl Estimator {
             segmented(&self.segmenter, &self.every_point, &self.config),
             &self.summaries,
             &selection,
+            &mut self.inclined_pixels,
             &mut self.ground_pixels,
         );
         let fit = match self.config.method {
@@ -333,6 +345,7 @@ impl Estimator {
     /// ([`Self::inspection`]).
     fn forget_last_frame(&mut self) {
         self.scene = None;
+        self.mount_mismatch = false;
         self.roles.ground.clear();
         self.roles.inclined = None;
         if let Some(seen) = &mut self.paper.inspected {
@@ -383,14 +396,27 @@ impl Estimator {
             mount_height_m: Some(cloud.mount.height_m),
         };
         self.scene = survey_surfaces(&input, &ground, &self.config.selection, &self.config.road);
+        let selection = &self.config.selection;
         let road = self.scene.as_ref().and_then(|scene| {
+            let road = scene.road?;
             let surface = scene.road_surface()?;
-            Some((surface.plane_index, scene.frame))
+            let pieces = road_pieces(
+                &scene.surfaces,
+                &self.summaries,
+                &scene.frame,
+                selection,
+                &road,
+            )
+            .into_iter()
+            .map(|k| scene.surfaces[k].plane_index)
+            .collect();
+            Some((surface.plane_index, pieces, scene.frame))
         });
         match road {
-            Some((inclined, frame)) => Ok(Selection {
+            Some((inclined, inclined_pieces, frame)) => Ok(Selection {
                 ground,
                 inclined,
+                inclined_pieces,
                 up: frame.up,
                 forward: frame.forward,
             }),

@@ -143,20 +143,26 @@ fn corridor_people_are_no_road_and_the_floor_is_whole() {
 }
 
 /// A basement whose Kinect v1 bends the floor by up to 4 degrees: one
-/// ground, no step and no ramp on it; the road, where there is one, is a
-/// wall (the README's walls stand at 86.6-89.0 degrees to the floor).
+/// ground, no step and no ramp on it; the road is a wall at every seed,
+/// within 3 degrees of 90 (the README's walls stand at 86.6-89.0 degrees to
+/// the floor; the wall ahead, cut into pieces differently by each draw, is
+/// measured on all of its pieces).
 #[test]
-fn basement_floor_is_one_ground_and_the_road_is_never_a_ramp() {
+fn basement_floor_is_one_ground_and_the_road_is_the_wall() {
     let Some(all) = estimates("nyu-basement") else {
         return;
     };
     assert_ground_is_the_floor("nyu-basement", &all, None);
     assert_no_floor_piece_is_structure("nyu-basement", &all);
     for (seed, e) in all.iter().enumerate() {
-        if let Some(road) = scene(e).road_surface() {
-            assert_eq!(road.role, SurfaceRole::Wall, "nyu-basement seed {seed}");
-            assert!(e.slope_deg.abs() >= 80.0, "nyu-basement seed {seed}");
-        }
+        assert_eq!(e.status, EstimateStatus::Ok, "nyu-basement seed {seed}");
+        let road = scene(e).road_surface().expect("a road");
+        assert_eq!(road.role, SurfaceRole::Wall, "nyu-basement seed {seed}");
+        assert!(
+            (e.slope_deg.abs() - 90.0).abs() <= 3.0,
+            "nyu-basement seed {seed}: {:.2}",
+            e.slope_deg
+        );
     }
 }
 

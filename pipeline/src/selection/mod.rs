@@ -59,7 +59,7 @@ pub use ground_frame::GroundFrame;
 pub use hidden_foot::foot_is_hidden;
 pub use inclined::{axis_distance, forward_direction, slope_sign};
 pub use quality::{plane_quality, PlaneQuality};
-pub use road::{choose_road, Road};
+pub use road::{choose_road, road_pieces, Road};
 pub use road_config::RoadConfig;
 pub use roles::assign_roles;
 pub use scene::{survey_surfaces, RoadScene, SurveyInput};
@@ -89,6 +89,10 @@ pub struct PlaneSummary {
 pub struct Selection {
     pub ground: Ground,
     pub inclined: usize,
+    /// Other pieces of the inclined plane's surface (plane indices; see
+    /// [`road::road_pieces`]), measured with it; empty when chosen on the
+    /// summaries alone.
+    pub inclined_pieces: Vec<usize>,
     /// Ground normal used for the direction (unit, up): the lowest ground
     /// plane's, or the reference up for a ground from the mount.
     pub up: Vector3<f64>,
@@ -172,8 +176,9 @@ pub fn select_ground(
 /// the ground chosen by it: the nearest floor ([`ground::nearest_floor`]
 /// among the flat planes within `unmounted_ground_max_tilt_deg` of the
 /// mount's up) is not parallel (`parallel_tolerance_deg`) to the ground's
-/// up (the mount's own, for a ground from the mount), or, with a known
-/// mount height, lies further than `ground_height_tolerance_m` from it.
+/// up (the mount's own, for a ground from the mount), is tilted more than
+/// `ground_max_tilt_deg` from the mount's up, or, with a known mount
+/// height, lies further than `ground_height_tolerance_m` from it.
 /// The robot may be tilted on its mount, or the mount's figures wrong: the
 /// estimate's confidence says so (`mount_mismatch`) instead of picking
 /// silently.
@@ -265,6 +270,7 @@ pub fn select_inclined(
         Some(inclined) => Ok(Selection {
             ground,
             inclined,
+            inclined_pieces: Vec::new(),
             up,
             forward,
         }),

@@ -50,15 +50,49 @@ pub struct Road {
     pub close_choice: bool,
 }
 
-/// Chooses the road among `surfaces` (whose planes `summaries` describes).
-pub fn choose_road(
+/// The other pieces of the road's surface among `surfaces` (indices): the
+/// candidates ([`road_candidates`]) at most [`SAME_SURFACE_M`] from it (by
+/// their mean distance in the corridor) with its slope (within
+/// `selection.parallel_tolerance_deg`) whose centroids lie within
+/// [`PIECE_GAP_M`] of its plane: one wall RANSAC cut in two, measured
+/// together (`estimator.rs`), so that the slope does not depend on where
+/// the draw cut it.
+pub fn road_pieces(
     surfaces: &[Surface],
     summaries: &[PlaneSummary],
     frame: &GroundFrame,
     selection: &SelectionConfig,
-    road: &RoadConfig,
-) -> Option<Road> {
-    let candidates: Vec<usize> = (0..surfaces.len())
+    road: &Road,
+) -> Vec<usize> {
+    let chosen = &surfaces[road.surface];
+    road_candidates(surfaces, summaries, frame, selection)
+        .into_iter()
+        .filter(|&k| k != road.surface)
+        .filter(|&k| {
+            let s = &surfaces[k];
+            (s.corridor_mean_m - chosen.corridor_mean_m).abs() <= SAME_SURFACE_M
+                && (s.slope_deg - chosen.slope_deg).abs() <= selection.parallel_tolerance_deg
+                && chosen
+                    .plane
+                    .signed_distance(&summaries[s.plane_index].centroid)
+                    .abs()
+                    <= PIECE_GAP_M
+        })
+        .collect()
+}
+
+/// A piece of the road's surface has its centroid within this of the
+/// road's plane, metres.
+pub const PIECE_GAP_M: f64 = 0.1;
+
+/// The road's candidates among `surfaces` (the module documentation).
+fn road_candidates(
+    surfaces: &[Surface],
+    summaries: &[PlaneSummary],
+    frame: &GroundFrame,
+    selection: &SelectionConfig,
+) -> Vec<usize> {
+    (0..surfaces.len())
         .filter(|&k| {
             let s = &surfaces[k];
             matches!(s.role, SurfaceRole::Ramp | SurfaceRole::Wall)
@@ -71,7 +105,18 @@ pub fn choose_road(
                     selection,
                 )
         })
-        .collect();
+        .collect()
+}
+
+/// Chooses the road among `surfaces` (whose planes `summaries` describes).
+pub fn choose_road(
+    surfaces: &[Surface],
+    summaries: &[PlaneSummary],
+    frame: &GroundFrame,
+    selection: &SelectionConfig,
+    road: &RoadConfig,
+) -> Option<Road> {
+    let candidates = road_candidates(surfaces, summaries, frame, selection);
     let support = candidates.iter().map(|&k| surfaces[k].inliers).max()?;
     let supported: Vec<usize> = candidates
         .iter()

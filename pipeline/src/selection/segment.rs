@@ -72,16 +72,24 @@ impl<'a> PlaneSegment<'a> {
     }
 }
 
-/// The selection's chosen planes among `planes`: the inclined plane, and
-/// the ground's segments joined (their pixels into `ground_pixels`; `None`
-/// for a ground from the mount).
+/// The selection's chosen planes among `planes`: the inclined plane (with
+/// its other pieces joined, their pixels into `inclined_pixels`), and the
+/// ground's segments joined (their pixels into `ground_pixels`; `None` for
+/// a ground from the mount).
 pub(crate) fn chosen_segments<'a>(
     planes: &'a [SegmentedPlane],
     summaries: &[PlaneSummary],
     selection: &Selection,
+    inclined_pixels: &'a mut Vec<u32>,
     ground_pixels: &'a mut Vec<u32>,
 ) -> (PlaneSegment<'a>, Option<PlaneSegment<'a>>) {
-    let inclined = PlaneSegment::of(&planes[selection.inclined], &summaries[selection.inclined]);
+    let inclined = if selection.inclined_pieces.is_empty() {
+        PlaneSegment::of(&planes[selection.inclined], &summaries[selection.inclined])
+    } else {
+        let mut members = vec![selection.inclined];
+        members.extend_from_slice(&selection.inclined_pieces);
+        PlaneSegment::joined(planes, summaries, &members, inclined_pixels)
+    };
     let ground = match &selection.ground {
         Ground::Planes(members) => Some(PlaneSegment::joined(
             planes,

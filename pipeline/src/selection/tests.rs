@@ -376,3 +376,35 @@ fn distance_along_the_axis() {
     let parallel = Plane::from_point_normal(&Vector3::new(0.0, 1.0, 0.0), &Vector3::y()).unwrap();
     assert!(axis_distance(&parallel).is_nan());
 }
+
+/// The floor seen against the mount: agreeing, tilted 20 degrees from it
+/// (the ground then comes from the mount), or 0.3 m off its height.
+#[test]
+fn a_floor_that_disagrees_with_the_mount_is_reported() {
+    let scene = Scene::ramp(16.0);
+    let planes = vec![
+        summary(&scene, 0, 30_000, 1.0),
+        summary(&scene, 1, 6000, 0.5),
+    ];
+    let up = mount_up(&scene).unwrap();
+    let height = planes[0].plane.d;
+    let check = |up: Vector3<f64>, height: f64| {
+        let ground = select_ground(&planes, Some(up), Some(height), &config()).unwrap();
+        (
+            ground.clone(),
+            mount_disagrees(&planes, &ground, Some(up), Some(height), &config()),
+        )
+    };
+    assert_eq!(check(up, height), (Ground::Planes(vec![0]), false));
+    let tilted = nalgebra::Rotation3::from_axis_angle(&Vector3::x_axis(), 20f64.to_radians()) * up;
+    assert_eq!(check(tilted, height), (Ground::Mount, true));
+    assert!(check(up, height + 0.3).1);
+    // Without a mount there is nothing to disagree with.
+    assert!(!mount_disagrees(
+        &planes,
+        &Ground::Planes(vec![0]),
+        None,
+        None,
+        &config()
+    ));
+}

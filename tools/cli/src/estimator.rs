@@ -388,6 +388,8 @@ struct Worker<'a> {
     max_points: usize,
     /// Clouds refused by the input checks.
     rejected: RejectedClouds,
+    /// The floor seen disagrees with the mount, as of the last frame.
+    mount_mismatch: bool,
 }
 
 /// Where a worker publishes each frame: the estimate and its surfaces.
@@ -421,7 +423,29 @@ impl<'a> Worker<'a> {
             status: StatusRate::new(Instant::now()),
             max_points: DEFAULT_MAX_CLOUD_POINTS,
             rejected: RejectedClouds::default(),
+            mount_mismatch: false,
         }
+    }
+
+    /// Warns (log and health, once each time it starts) when the floor the
+    /// camera sees disagrees with the configured mount, and logs when it
+    /// agrees again.
+    fn check_mount(&mut self, frame_index: u64) {
+        let mismatch = self.estimator.mount_mismatch();
+        if mismatch && !self.mount_mismatch {
+            let text = format!(
+                "frame {frame_index}: the floor seen disagrees with the mount (tilted against it, \
+                 or off its height): check [mount], or the robot stands tilted"
+            );
+            tracing::warn!("{text}");
+            self.health.monitor.error(&text);
+        } else if !mismatch && self.mount_mismatch {
+            tracing::info!(
+                frame = frame_index,
+                "the floor seen agrees with the mount again"
+            );
+        }
+        self.mount_mismatch = mismatch;
     }
 }
 
@@ -538,6 +562,7 @@ impl Worker<'_> {
             stamp_ns: header.capture_stamp_ns,
         };
         let estimate = self.estimator.estimate_frame(&view, frame);
+        self.check_mount(header.frame_index);
         let mut message = SlopeEstimate {
             frame_index: header.frame_index,
             capture_stamp_ns: header.capture_stamp_ns,
