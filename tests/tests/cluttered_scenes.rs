@@ -43,7 +43,10 @@ fn assert_ground_at(estimates: &[Estimate], height_m: f64) {
         match e.ground {
             Some(g) => {
                 assert!(!e.ground_from_mount, "frame {k}: {e:?}");
-                assert!((g.coefficients[3] - height_m).abs() < 0.1, "frame {k}: {g:?}");
+                assert!(
+                    (g.coefficients[3] - height_m).abs() < 0.1,
+                    "frame {k}: {g:?}"
+                );
             }
             None => assert!(e.ground_from_mount, "frame {k}: no ground at all: {e:?}"),
         }

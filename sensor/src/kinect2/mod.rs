@@ -2,7 +2,7 @@
 //!
 //! libfreenect2's API is C++, so `sensor/shim/` wraps the part a robot needs
 //! in a small `extern "C"` layer; `build.rs` compiles it with `cc` and
-//! generates [`sys`] from its header with bindgen. Only the calls into it
+//! generates `sys` from its header with bindgen. Only the calls into it
 //! need libfreenect2 (cargo feature `kinect2`); everything that needs no
 //! library (conversions, the camera's parameters and their checks, frame
 //! checks, the device clock, the error mapping, the settings) builds and is

@@ -1,5 +1,5 @@
 //! How to run the Kinect v2 and what happened to its stream: the settings
-//! [`super::Kinect2Source`] (feature `kinect2`) takes and the counters it
+//! `Kinect2Source` (feature `kinect2`) takes and the counters it
 //! keeps. Pure, so that programs check their settings without the library.
 
 use std::time::Duration;
