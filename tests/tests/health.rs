@@ -96,13 +96,6 @@ fn the_estimator_reports_its_health_every_interval() {
     let busy = busy.expect("no report while frames flowed");
     let rate = number(&busy, "rate_out_hz");
     assert!(rate > 2.0 && rate < 25.0, "{busy}");
-    // At most the frames the replay sent at 10 Hz within the window
-    // (one more for a frame that arrived at the window's start).
-    let window_s = number(&busy, "window_ms") / 1e3;
-    assert!(
-        rate * window_s <= (10.0 * window_s).ceil() + 1.0 + 0.02,
-        "{busy}"
-    );
     let stages = busy["stages"].as_array().expect("stages");
     let names: Vec<&str> = stages.iter().filter_map(|s| s["name"].as_str()).collect();
     for stage in ["outlier", "ransac", "normals", "kmeans", "total"] {
