@@ -77,56 +77,88 @@ mod tests {
     use super::*;
     use std::sync::atomic::{AtomicBool, Ordering};
     use std::sync::Arc;
-    use std::time::Instant;
 
     const SLICE: Duration = Duration::from_millis(200);
 
-    /// A simulated open that blocks for 5 s: a stop request 100 ms in ends
-    /// the wait within one slice, and the open finishes (and cleans up) on
-    /// its own thread afterwards.
+    /// How long a test waits for a call that should end at once: past
+    /// it, the test fails instead of hanging (no speed is asserted).
+    const DEADLINE: Duration = Duration::from_secs(60);
+
+    /// Runs `test` on a thread of its own and gives its result, or fails
+    /// when it has not ended within [`DEADLINE`].
+    fn within_deadline<T: Send + 'static>(test: impl FnOnce() -> T + Send + 'static) -> T {
+        let (tx, rx) = mpsc::channel();
+        std::thread::spawn(move || {
+            let _ = tx.send(test());
+        });
+        rx.recv_timeout(DEADLINE)
+            .unwrap_or_else(|e| panic!("no result within {DEADLINE:?}: {e}"))
+    }
+
+    /// A simulated open that blocks until released: a stop request made
+    /// during the first slice ends the wait at the end of the next one
+    /// (no further slice is waited for), and the open finishes (and
+    /// cleans up) on its own thread afterwards.
     #[test]
     fn a_stop_during_a_slow_open_returns_within_one_slice() {
-        let stop = StopFlag::new();
-        let stopper = stop.clone();
-        let finished = Arc::new(AtomicBool::new(false));
-        let done = Arc::clone(&finished);
-        std::thread::spawn(move || {
-            std::thread::sleep(Duration::from_millis(100));
-            stopper.stop();
-        });
-        let started = Instant::now();
-        let mut slices = 0;
-        let outcome =
-            run_interruptible("slow-open", &stop, SLICE, &mut || slices += 1, move || {
-                std::thread::sleep(Duration::from_secs(5));
-                done.store(true, Ordering::SeqCst);
+        let (release, gate) = mpsc::channel::<()>();
+        let (finished_tx, finished) = mpsc::channel::<()>();
+        let (outcome, slices) = within_deadline(move || {
+            let stop = StopFlag::new();
+            let stopper = stop.clone();
+            let mut slices = 0;
+            let on_slice = &mut || {
+                slices += 1;
+                if slices == 1 {
+                    stopper.stop();
+                }
+            };
+            let outcome = run_interruptible("slow-open", &stop, SLICE, on_slice, move || {
+                // Blocks until the test releases it (or drops the sender).
+                let _ = gate.recv();
+                let _ = finished_tx.send(());
                 42
             })
             .expect("runs");
-        let waited = started.elapsed();
+            (outcome, slices)
+        });
         assert_eq!(outcome, None);
-        assert!(
-            waited < Duration::from_millis(100) + SLICE + Duration::from_millis(150),
-            "{waited:?}"
-        );
-        assert!(!finished.load(Ordering::SeqCst));
+        assert_eq!(slices, 1, "the wait went on past the slice after the stop");
+        assert!(finished.try_recv().is_err(), "the open had not finished");
+        release.send(()).expect("the open is still waiting");
+        finished
+            .recv_timeout(DEADLINE)
+            .expect("the abandoned open finishes on its own thread");
     }
 
+    /// A call that outlasts two slices (it waits for the second slice's
+    /// callback) gives its result, and the slices it outlasted were
+    /// reported.
     #[test]
     fn a_quick_call_gives_its_result_and_slices_are_reported() {
-        let stop = StopFlag::new();
-        let mut slices = 0;
-        let outcome = run_interruptible(
-            "quick",
-            &stop,
-            Duration::from_millis(10),
-            &mut || slices += 1,
-            || {
-                std::thread::sleep(Duration::from_millis(60));
-                "opened"
-            },
-        )
-        .expect("runs");
+        let (outcome, slices) = within_deadline(|| {
+            let stop = StopFlag::new();
+            let (release, gate) = mpsc::channel::<()>();
+            let mut slices = 0;
+            let on_slice = &mut || {
+                slices += 1;
+                if slices == 2 {
+                    let _ = release.send(());
+                }
+            };
+            let outcome = run_interruptible(
+                "quick",
+                &stop,
+                Duration::from_millis(10),
+                on_slice,
+                move || {
+                    let _ = gate.recv();
+                    "opened"
+                },
+            )
+            .expect("runs");
+            (outcome, slices)
+        });
         assert_eq!(outcome, Some("opened"));
         assert!(slices >= 2, "{slices}");
     }

@@ -9,7 +9,6 @@ pub mod frame_reads;
 pub mod input_file;
 pub mod interruptible;
 pub mod ipc;
-#[cfg(feature = "kinect2")]
 pub mod kinect2;
 pub mod missing_depth;
 pub mod projection;

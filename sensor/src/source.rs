@@ -77,12 +77,10 @@ pub enum SourceError {
     #[error(transparent)]
     Reader(#[from] InterruptibleError),
     /// The Kinect v2 failed in a way the source cannot recover from.
-    #[cfg(feature = "kinect2")]
     #[error(transparent)]
     Kinect2(Box<crate::kinect2::Kinect2Error>),
 }
 
-#[cfg(feature = "kinect2")]
 impl From<crate::kinect2::Kinect2Error> for SourceError {
     fn from(err: crate::kinect2::Kinect2Error) -> Self {
         Self::Kinect2(Box::new(err))

@@ -1,29 +1,9 @@
 //! The real Kinect recordings in `shared/data` open, decode and project.
-//! Skipped, with a note, when the data directory is absent (a failure when
-//! `SLOPE_REQUIRE_SHARED_DATA` is set, as in CI).
-
-use std::path::PathBuf;
+//! Each recording that is absent is skipped, with a note (a failure in CI:
+//! `slope_test_support::shared_data`).
 
 use slope_ipc_types::CloudPoint;
 use slope_sensor::recording::Recording;
-
-fn data_dir() -> Option<PathBuf> {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data");
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        assert!(
-            std::env::var_os("SLOPE_REQUIRE_SHARED_DATA").is_none(),
-            "{} is missing and SLOPE_REQUIRE_SHARED_DATA is set",
-            dir.display()
-        );
-        eprintln!(
-            "note: {} is absent; skipping the real-data test",
-            dir.display()
-        );
-        None
-    }
-}
 
 struct Expected {
     name: &'static str,
@@ -75,13 +55,10 @@ const RECORDINGS: [Expected; 3] = [
 
 #[test]
 fn real_recordings_open_decode_and_project() {
-    let Some(data) = data_dir() else { return };
     for expected in &RECORDINGS {
-        let dir = data.join(expected.name);
-        if !dir.is_dir() {
-            eprintln!("note: {} is absent; skipping it", dir.display());
+        let Some(dir) = slope_test_support::shared_data(expected.name) else {
             continue;
-        }
+        };
         let rec = Recording::open(&dir).unwrap_or_else(|e| panic!("{e}"));
         let meta = rec.meta();
         assert_eq!(meta.sensor, expected.sensor);

@@ -56,24 +56,9 @@ pub fn recording(name: &str) -> PathBuf {
     repo_root().join("tests/recordings").join(name)
 }
 
-/// Set (to anything) to make a missing ../shared/data a failure instead of
-/// a skipped test; CI sets it.
-pub const REQUIRE_SHARED_DATA_ENV: &str = "SLOPE_REQUIRE_SHARED_DATA";
-
-/// The real Kinect frames in ../shared/data, when present. Panics when they
-/// are missing and [`REQUIRE_SHARED_DATA_ENV`] is set.
-pub fn shared_data(name: &str) -> Option<PathBuf> {
-    let path = repo_root().join("../shared/data").join(name);
-    if path.is_dir() {
-        return Some(path);
-    }
-    assert!(
-        std::env::var_os(REQUIRE_SHARED_DATA_ENV).is_none(),
-        "{} is missing and {REQUIRE_SHARED_DATA_ENV} is set",
-        path.display()
-    );
-    None
-}
+/// The real Kinect frames in ../shared/data, when present; a failure when
+/// they are missing in CI ([`slope_test_support::shared_data`]).
+pub use slope_test_support::shared_data;
 
 /// A service prefix no other test (or running stack) uses.
 pub fn unique_prefix(test: &str) -> String {

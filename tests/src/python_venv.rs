@@ -1,25 +1,17 @@
 //! The Python venvs of the tests that check us against an independent
 //! implementation from PyPI (Cyclone DDS, rosbags, the `iceoryx2` client):
 //! made once per test binary in its `CARGO_TARGET_TMPDIR`, skipped only
-//! where Python is optional.
+//! where Python may be missing (never in CI: `SLOPE_REQUIRE_PYTHON` or `CI`).
 
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-/// Set (as in CI), a venv that cannot be made fails the test instead of
-/// skipping it.
-pub const REQUIRE_PYTHON_ENV: &str = "SLOPE_REQUIRE_PYTHON";
+use slope_test_support::{require, Requirement};
 
 /// The interpreter that makes the venvs: `PYTHON`, else `python3`.
 pub fn python() -> String {
     std::env::var("PYTHON").unwrap_or_else(|_| "python3".to_string())
-}
-
-/// True when a test may skip for want of Python: neither
-/// [`REQUIRE_PYTHON_ENV`] nor `CI` is set.
-pub fn python_optional() -> bool {
-    std::env::var_os(REQUIRE_PYTHON_ENV).is_none() && std::env::var_os("CI").is_none()
 }
 
 /// The interpreter of a venv in `dir` with `packages` (names or paths)
@@ -76,15 +68,12 @@ pub fn make_venv(
 }
 
 /// The interpreter `made` holds, or `None` (the test skips, saying so)
-/// when it could not be made and Python is optional; a failure otherwise.
+/// when it could not be made and Python may be missing; a failure in CI
+/// ([`slope_test_support::require`] with [`Requirement::Python`]).
 /// `what` names what the venv was for.
 pub fn venv_or_skip(made: &Result<PathBuf, String>, what: &str) -> Option<PathBuf> {
-    match made {
-        Ok(bin) => Some(bin.clone()),
-        Err(why) => {
-            assert!(python_optional(), "{what} cannot be installed: {why}");
-            eprintln!("SKIPPED: {what} cannot be installed here ({why})");
-            None
-        }
-    }
+    let made = made
+        .clone()
+        .map_err(|why| format!("{what} cannot be installed: {why}"));
+    require(Requirement::Python, made)
 }

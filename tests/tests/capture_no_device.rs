@@ -9,6 +9,7 @@ use nix::sys::signal::Signal;
 use slope_integration_tests::{deadline, read_notify_until, unique_prefix, Proc};
 use slope_sensor::device_lock::{DeviceLock, LOCK_DIR_ENV};
 use slope_sensor::kinect2::LOCK_KIND;
+use slope_test_support::{require, Requirement};
 
 #[test]
 fn no_kinect_is_a_clear_error_and_a_nonzero_exit_within_seconds() {
@@ -164,11 +165,11 @@ fn waiting_and_failing_are_told_to_systemd() {
 #[test]
 fn a_pipeline_that_is_not_built_in_exits_with_ex_config() {
     use slope_sensor::kinect2::Pipeline;
-    let Some(missing) = [Pipeline::OpenCl, Pipeline::Cuda, Pipeline::OpenGl]
+    let missing = [Pipeline::OpenCl, Pipeline::Cuda, Pipeline::OpenGl]
         .into_iter()
         .find(|p| !p.is_available())
-    else {
-        eprintln!("skipped: this libfreenect2 has every GPU pipeline");
+        .ok_or_else(|| "this libfreenect2 has every GPU pipeline".to_string());
+    let Some(missing) = require(Requirement::MissingGpuPipeline, missing) else {
         return;
     };
     let prefix = unique_prefix("capture-pipeline");

@@ -33,21 +33,32 @@ fn assert_no_ramp(estimates: &[Estimate]) {
     }
 }
 
-/// The ground plane, when one was measured, lies `height_m` below the camera.
+/// Every frame has a ground: the plane measured, `height_m` below the
+/// camera, or, where no ground plane was seen (a table hiding the floor),
+/// the mount's (`ground_from_mount`). Never none, and never a plane at
+/// another height (a table top).
 fn assert_ground_at(estimates: &[Estimate], height_m: f64) {
-    for e in estimates {
-        if let Some(g) = e.ground {
-            assert!((g.coefficients[3] - height_m).abs() < 0.1, "{g:?}");
+    assert!(!estimates.is_empty(), "no frames");
+    for (k, e) in estimates.iter().enumerate() {
+        match e.ground {
+            Some(g) => {
+                assert!(!e.ground_from_mount, "frame {k}: {e:?}");
+                assert!(
+                    (g.coefficients[3] - height_m).abs() < 0.1,
+                    "frame {k}: {g:?}"
+                );
+            }
+            None => assert!(e.ground_from_mount, "frame {k}: no ground at all: {e:?}"),
         }
     }
 }
 
-/// Every frame reports a ground plane, `height_m` below the camera.
+/// Every frame reports a ground plane it measured, `height_m` below the
+/// camera.
 fn assert_ground_seen_at(estimates: &[Estimate], height_m: f64) {
-    assert!(
-        estimates.iter().all(|e| e.ground.is_some()),
-        "{estimates:?}"
-    );
+    for (k, e) in estimates.iter().enumerate() {
+        assert!(e.ground.is_some(), "frame {k}: no ground plane seen: {e:?}");
+    }
     assert_ground_at(estimates, height_m);
 }
 

@@ -61,6 +61,27 @@ fn the_estimator_reports_its_health_every_interval() {
     assert_eq!(number(last, "frames_in") as u64, frames, "{last}");
     assert_eq!(frames_out + dropped, frames, "{last}");
     assert!(frames_out >= frames / 2, "{last}");
+    // Each report's rates are its window's frames over its window: the
+    // frames counted since the report before (none before the first: the
+    // replay started after the echo subscribed) over `window_ms`, to the
+    // rounding of `window_ms` to whole milliseconds.
+    let mut before = (0.0, 0.0);
+    for report in &reports {
+        let window_s = number(report, "window_ms") / 1e3;
+        assert!(window_s > 0.0, "{report}");
+        let counted = (number(report, "frames_in"), number(report, "frames_out"));
+        for (key, frames_in_window) in [
+            ("rate_in_hz", counted.0 - before.0),
+            ("rate_out_hz", counted.1 - before.1),
+        ] {
+            let rate = number(report, key);
+            assert!(
+                (rate * window_s - frames_in_window).abs() < 0.02,
+                "{key} {rate} over {window_s} s is not {frames_in_window} frames: {report}"
+            );
+        }
+        before = counted;
+    }
     assert_eq!(number(last, "errors"), 0.0, "{last}");
     assert!(last["last_error"].is_null(), "{last}");
     // Reports come every 0.5 s: uptimes increase by about that much.

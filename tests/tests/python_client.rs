@@ -13,7 +13,7 @@ use std::time::Duration;
 use nix::sys::signal::Signal;
 
 use serde_json::Value;
-use slope_integration_tests::python_venv::{make_venv, python, python_optional, venv_or_skip};
+use slope_integration_tests::python_venv::{make_venv, python, venv_or_skip};
 use slope_integration_tests::{deadline, replay_frames, repo_root, unique_prefix, Proc};
 use slope_ipc_types::layout::{self, FieldLayout};
 use slope_ipc_types::{
@@ -21,6 +21,7 @@ use slope_ipc_types::{
     MAX_SURFACES, NO_SURFACE,
 };
 use slope_sensor::ipc::ESTIMATE_MAX_SUBSCRIBERS;
+use slope_test_support::{require, Requirement};
 
 /// A venv with the client installed (and with it `iceoryx2` from PyPI),
 /// made once for all the tests of this file (they run in parallel: two
@@ -42,11 +43,12 @@ fn python_runs() -> bool {
         .arg("--version")
         .output()
         .is_ok_and(|out| out.status.success());
-    assert!(runs || python_optional(), "{} does not run", python());
-    if !runs {
-        eprintln!("SKIPPED: {} does not run here", python());
-    }
-    runs
+    let found = if runs {
+        Ok(())
+    } else {
+        Err(format!("{} does not run", python()))
+    };
+    require(Requirement::Python, found).is_some()
 }
 
 /// Runs `code` with the repository's `python/` on the path; its stdout.

@@ -171,7 +171,6 @@ fn recording_the_topic_of_a_replay_gives_back_the_recording() {
 #[test]
 fn recording_a_replayed_kinect_frame_keeps_its_depth_to_the_millimetre() {
     let Some(source) = shared_data("kinect2-stairs-front") else {
-        eprintln!("shared/data/kinect2-stairs-front is not here; skipping");
         return;
     };
     let work = tempfile::tempdir().expect("tempdir");

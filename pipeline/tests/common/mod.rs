@@ -136,22 +136,10 @@ pub fn mirror_mount(mount: Mount) -> Mount {
     }
 }
 
-/// `pipeline/../../shared/data/<name>`, or `None` (with a note) when absent;
-/// a failure instead when `SLOPE_REQUIRE_SHARED_DATA` is set (CI).
+/// `../shared/data/<name>`, or `None` (with a note) when absent; a failure
+/// instead in CI ([`slope_test_support::shared_data`]).
 pub fn shared_data(name: &str) -> Option<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/data")
-        .join(name);
-    if dir.join("recording.toml").is_file() {
-        return Some(dir);
-    }
-    assert!(
-        std::env::var_os("SLOPE_REQUIRE_SHARED_DATA").is_none(),
-        "{} is missing and SLOPE_REQUIRE_SHARED_DATA is set",
-        dir.display()
-    );
-    println!("note: {} is absent, skipping", dir.display());
-    None
+    slope_test_support::shared_data(name)
 }
 
 /// The left-right mirror image of an organised cloud: rows reversed, x

@@ -19,7 +19,8 @@
 
 use slope_ipc_types::Intrinsics;
 
-use super::device::{FrameFormat, IrParams};
+use super::frame::FrameFormat;
+use super::params::IrParams;
 use crate::recording::{ColorImage, DepthImage};
 
 /// Metres per depth count of the images we produce.

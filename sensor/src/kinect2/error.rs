@@ -1,43 +1,52 @@
 //! Errors of the Kinect v2 layer. Each says which device (serial) and which
 //! operation failed, and carries the last error libfreenect2 logged, which
 //! usually names the USB cause (permissions, bandwidth, a lost device).
+//! Pure: the shim's status codes are mirrored here (the device layer checks
+//! them against the shim's header at compile time), and turning a status
+//! into an error is `ffi_error.rs` (feature `kinect2`).
 
 use std::fmt;
-use std::ptr::NonNull;
 
-use super::log;
-use super::sys;
-
-/// A failed libfreenect2 call through the shim, as reported by the shim.
+/// A failed libfreenect2 call through the shim, as reported by the shim
+/// (an `f2s_status`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ShimStatus(pub u32);
 
 impl ShimStatus {
-    pub(crate) fn from_raw(status: sys::f2s_status) -> Self {
-        Self(status.0)
-    }
+    pub const OK: Self = Self(0);
+    pub const NULL_ARGUMENT: Self = Self(1);
+    pub const NOT_FOUND: Self = Self(2);
+    pub const OPEN_FAILED: Self = Self(3);
+    pub const PIPELINE_UNAVAILABLE: Self = Self(4);
+    pub const START_FAILED: Self = Self(5);
+    pub const STOP_FAILED: Self = Self(6);
+    pub const CLOSE_FAILED: Self = Self(7);
+    pub const TIMEOUT: Self = Self(8);
+    pub const NO_FRAME: Self = Self(9);
+    pub const BAD_SIZE: Self = Self(10);
+    pub const BUFFER_TOO_SMALL: Self = Self(11);
+    pub const EXCEPTION: Self = Self(12);
 
-    pub(crate) fn is_ok(self) -> bool {
-        self.0 == sys::f2s_status::F2S_OK.0
+    /// True for the shim's `F2S_OK`.
+    pub fn is_ok(self) -> bool {
+        self == Self::OK
     }
 
     fn describe(self) -> &'static str {
-        match sys::f2s_status(self.0) {
-            sys::f2s_status::F2S_OK => "ok",
-            sys::f2s_status::F2S_ERR_NULL_ARGUMENT => "null argument",
-            sys::f2s_status::F2S_ERR_NOT_FOUND => "not found",
-            sys::f2s_status::F2S_ERR_OPEN_FAILED => "libfreenect2 could not open the device",
-            sys::f2s_status::F2S_ERR_PIPELINE_UNAVAILABLE => {
-                "the depth pipeline is not built into libfreenect2"
-            }
-            sys::f2s_status::F2S_ERR_START_FAILED => "libfreenect2 could not start the streams",
-            sys::f2s_status::F2S_ERR_STOP_FAILED => "libfreenect2 could not stop the streams",
-            sys::f2s_status::F2S_ERR_CLOSE_FAILED => "libfreenect2 could not close the device",
-            sys::f2s_status::F2S_ERR_TIMEOUT => "timed out",
-            sys::f2s_status::F2S_ERR_NO_FRAME => "the frame set lacks that frame",
-            sys::f2s_status::F2S_ERR_BAD_SIZE => "an image has the wrong size",
-            sys::f2s_status::F2S_ERR_BUFFER_TOO_SMALL => "a buffer is too small",
-            sys::f2s_status::F2S_ERR_EXCEPTION => "libfreenect2 threw a C++ exception",
+        match self {
+            Self::OK => "ok",
+            Self::NULL_ARGUMENT => "null argument",
+            Self::NOT_FOUND => "not found",
+            Self::OPEN_FAILED => "libfreenect2 could not open the device",
+            Self::PIPELINE_UNAVAILABLE => "the depth pipeline is not built into libfreenect2",
+            Self::START_FAILED => "libfreenect2 could not start the streams",
+            Self::STOP_FAILED => "libfreenect2 could not stop the streams",
+            Self::CLOSE_FAILED => "libfreenect2 could not close the device",
+            Self::TIMEOUT => "timed out",
+            Self::NO_FRAME => "the frame set lacks that frame",
+            Self::BAD_SIZE => "an image has the wrong size",
+            Self::BUFFER_TOO_SMALL => "a buffer is too small",
+            Self::EXCEPTION => "libfreenect2 threw a C++ exception",
             _ => "unknown shim status",
         }
     }
@@ -149,6 +158,23 @@ pub enum Kinect2Error {
     InvalidSerial(String),
 }
 
+impl Kinect2Error {
+    /// Errors worth retrying while waiting for a device (and when
+    /// reopening it): it may appear, come back after its reset, or be let
+    /// go by the process that holds it. The others end the stream.
+    pub fn is_retryable(&self) -> bool {
+        matches!(
+            self,
+            Kinect2Error::NoDevice { .. }
+                | Kinect2Error::SerialNotFound { .. }
+                | Kinect2Error::IndexOutOfRange { .. }
+                | Kinect2Error::Operation { .. }
+                | Kinect2Error::Locked(_)
+                | Kinect2Error::SerialMismatch { .. }
+        )
+    }
+}
+
 fn exception_suffix(exception: &Option<String>) -> String {
     match exception {
         Some(text) => format!(": {text}"),
@@ -171,110 +197,68 @@ fn list(items: &[String]) -> String {
     }
 }
 
-/// `Ok` for `F2S_OK`, else the failed `action` (on the device `serial`, if
-/// any) with the last problem libfreenect2 logged.
-pub(crate) fn check(
-    status: sys::f2s_status,
-    action: &'static str,
-    serial: Option<&str>,
-) -> Result<(), Kinect2Error> {
-    let status = ShimStatus::from_raw(status);
-    if status.is_ok() {
-        Ok(())
-    } else {
-        let exception = if status.0 == sys::f2s_status::F2S_ERR_EXCEPTION.0 {
-            take_exception()
-        } else {
-            None
-        };
-        Err(Kinect2Error::Operation {
-            action,
-            serial: serial.map(str::to_string),
-            status,
-            exception,
-            libfreenect2_log: log::take_last_problem(),
-        })
-    }
-}
-
-/// The text of the last C++ exception the shim caught on this thread (and
-/// forgets it), if any.
-pub(crate) fn take_exception() -> Option<String> {
-    let mut buffer = vec![0u8; 256];
-    loop {
-        let mut length = 0usize;
-        // SAFETY: `buffer` holds `buffer.len()` writable bytes; `length` is
-        // writable. The text is thread-local in the shim.
-        let status = unsafe {
-            sys::f2s_take_exception(buffer.as_mut_ptr().cast(), buffer.len(), &mut length)
-        };
-        if status == sys::f2s_status::F2S_ERR_BUFFER_TOO_SMALL && length + 1 > buffer.len() {
-            buffer.resize(length + 1, 0);
-            continue;
-        }
-        if status != sys::f2s_status::F2S_OK {
-            return None;
-        }
-        buffer.truncate(length.min(buffer.len()));
-        return Some(String::from_utf8_lossy(&buffer).into_owned());
-    }
-}
-
-/// The handle a shim constructor returned with `F2S_OK`; an error naming
-/// `action` should it be null all the same.
-pub(crate) fn non_null<T>(
-    raw: *mut T,
-    action: &'static str,
-    serial: Option<&str>,
-) -> Result<NonNull<T>, Kinect2Error> {
-    NonNull::new(raw).ok_or_else(|| Kinect2Error::Operation {
-        action,
-        serial: serial.map(str::to_string),
-        status: ShimStatus(sys::f2s_status::F2S_ERR_NULL_ARGUMENT.0),
-        exception: None,
-        libfreenect2_log: log::take_last_problem(),
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn throw(message: Option<&std::ffi::CStr>) -> Result<(), Kinect2Error> {
-        let pointer = message.map_or(std::ptr::null(), std::ffi::CStr::as_ptr);
-        // SAFETY: `pointer` is null or a NUL-terminated string that outlives
-        // the call; the shim catches what it throws.
-        let status = unsafe { sys::f2s_selftest_throw(pointer) };
-        check(status, "run the exception self-test", Some("test"))
+    #[test]
+    fn only_lasting_errors_end_the_stream() {
+        assert!(Kinect2Error::SerialNotFound {
+            serial: "1".into(),
+            connected: Vec::new(),
+        }
+        .is_retryable());
+        assert!(!Kinect2Error::InvalidParams("x".into()).is_retryable());
+        assert!(!Kinect2Error::AlreadyOpen { serial: "1".into() }.is_retryable());
+        assert!(Kinect2Error::SerialMismatch {
+            requested: "1".into(),
+            opened: "2".into(),
+        }
+        .is_retryable());
     }
 
+    /// A failed call names the action, the device, the shim's status in
+    /// words and number, the C++ exception and libfreenect2's last line.
     #[test]
-    fn the_text_of_a_caught_exception_reaches_the_error_of_its_thread_only() {
-        let err = throw(Some(c"LIBUSB_ERROR_NO_MEM in the shim")).expect_err("threw");
-        match &err {
-            Kinect2Error::Operation { exception, .. } => {
-                assert_eq!(
-                    exception.as_deref(),
-                    Some("LIBUSB_ERROR_NO_MEM in the shim")
-                );
-            }
-            other => panic!("expected Operation, got {other:?}"),
-        }
-        assert!(
-            err.to_string().contains("LIBUSB_ERROR_NO_MEM in the shim"),
-            "{err}"
+    fn a_failed_operation_says_what_where_and_why() {
+        let err = Kinect2Error::Operation {
+            action: "start the streams",
+            serial: Some("011054343347".into()),
+            status: ShimStatus::START_FAILED,
+            exception: Some("LIBUSB_ERROR_TIMEOUT".into()),
+            libfreenect2_log: Some("[Freenect2DeviceImpl] failed to start".into()),
+        };
+        assert_eq!(
+            err.to_string(),
+            "failed to start the streams (Kinect v2 011054343347): libfreenect2 could not \
+             start the streams (status 5): LIBUSB_ERROR_TIMEOUT (libfreenect2: \
+             [Freenect2DeviceImpl] failed to start)"
         );
-        // Taken once; another thread's exception is not ours.
-        assert_eq!(take_exception(), None);
-        std::thread::spawn(|| {
-            // SAFETY: as above.
-            let status = unsafe { sys::f2s_selftest_throw(c"elsewhere".as_ptr()) };
-            assert_eq!(status, sys::f2s_status::F2S_ERR_EXCEPTION);
-        })
-        .join()
-        .expect("thread");
-        assert_eq!(take_exception(), None);
-        let err = throw(None).expect_err("threw an int");
-        assert!(err.to_string().contains("unknown type"), "{err}");
+        let bare = Kinect2Error::Operation {
+            action: "enumerate",
+            serial: None,
+            status: ShimStatus(99),
+            exception: None,
+            libfreenect2_log: None,
+        };
+        assert_eq!(
+            bare.to_string(),
+            "failed to enumerate (Kinect v2 -): unknown shim status (status 99)"
+        );
+        assert!(ShimStatus::OK.is_ok() && !ShimStatus::TIMEOUT.is_ok());
+    }
+
+    /// Every status the shim defines has words of its own.
+    #[test]
+    fn every_shim_status_is_described() {
+        let described: Vec<&str> = (0..=12).map(|code| ShimStatus(code).describe()).collect();
+        for (code, words) in described.iter().enumerate() {
+            assert_ne!(*words, "unknown shim status", "status {code}");
+        }
+        let mut unique = described.clone();
+        unique.sort_unstable();
+        unique.dedup();
+        assert_eq!(unique.len(), described.len(), "{described:?}");
+        assert_eq!(ShimStatus(13).describe(), "unknown shim status");
     }
 }

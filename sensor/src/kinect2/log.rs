@@ -9,18 +9,49 @@
 //! decoders (`[OpenCLDepthPacketProcessor] ...`, `[CudaDepthPacketProcessor]
 //! ...`), which come from libfreenect2's processing thread, are counted
 //! separately: [`depth_pipeline_errors`].
+//!
+//! What a line means (which thread's problem, a depth decoder's error) is
+//! pure; installing the callback and receiving lines from C++ are the FFI
+//! calls (feature `kinect2`).
+
+// Without the `kinect2` feature only the tests log lines.
+#![cfg_attr(not(feature = "kinect2"), allow(dead_code))]
 
 use std::cell::RefCell;
-use std::ffi::c_void;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::{Mutex, Once};
+use std::sync::Mutex;
 
-use super::sys;
+/// The level of a libfreenect2 log line (`libfreenect2::Logger::Level`,
+/// the shim's `f2s_log_level`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum LogLevel {
+    None,
+    Error,
+    Warning,
+    Info,
+    Debug,
+}
+
+impl LogLevel {
+    /// The level of libfreenect2's code `code` (the device layer checks
+    /// the codes against the shim's header at compile time); an unknown
+    /// code is the most verbose.
+    pub(crate) fn from_code(code: u32) -> Self {
+        match code {
+            0 => Self::None,
+            1 => Self::Error,
+            2 => Self::Warning,
+            3 => Self::Info,
+            _ => Self::Debug,
+        }
+    }
+}
 
 /// The target libfreenect2's lines are logged under.
 pub const LOG_TARGET: &str = "libfreenect2";
 
-static INSTALL: Once = Once::new();
+#[cfg(feature = "kinect2")]
+static INSTALL: std::sync::Once = std::sync::Once::new();
 
 thread_local! {
     /// The last error or warning libfreenect2 logged on this thread.
@@ -33,7 +64,9 @@ static DEPTH_PIPELINE_ERRORS: AtomicU64 = AtomicU64::new(0);
 static LAST_DEPTH_PIPELINE_ERROR: Mutex<Option<String>> = Mutex::new(None);
 
 /// Installs the forwarding once per process (later calls do nothing).
+#[cfg(feature = "kinect2")]
 pub fn install() {
+    use super::sys;
     INSTALL.call_once(|| {
         let level = match tracing::level_filters::LevelFilter::current() {
             f if f >= tracing::level_filters::LevelFilter::TRACE => {
@@ -87,8 +120,8 @@ pub fn depth_pipeline_errors() -> (u64, Option<String>) {
 /// True for an error line of a depth decoder: libfreenect2 prefixes every
 /// line with its source, e.g. `[OpenCLDepthPacketProcessor] could not
 /// initialize OpenCLDepthPacketProcessor`.
-pub(crate) fn is_depth_pipeline_error(level: sys::f2s_log_level, text: &str) -> bool {
-    level == sys::f2s_log_level::F2S_LOG_ERROR
+pub(crate) fn is_depth_pipeline_error(level: LogLevel, text: &str) -> bool {
+    level == LogLevel::Error
         && text
             .strip_prefix('[')
             .and_then(|rest| rest.split_once(']'))
@@ -96,8 +129,8 @@ pub(crate) fn is_depth_pipeline_error(level: sys::f2s_log_level, text: &str) -> 
 }
 
 /// Remembers a line of `level` logged on the calling thread.
-fn remember(level: sys::f2s_log_level, text: &str) {
-    if level == sys::f2s_log_level::F2S_LOG_ERROR || level == sys::f2s_log_level::F2S_LOG_WARNING {
+fn remember(level: LogLevel, text: &str) {
+    if level == LogLevel::Error || level == LogLevel::Warning {
         let _ = LAST_PROBLEM.try_with(|last| *last.borrow_mut() = Some(text.to_string()));
     }
     if is_depth_pipeline_error(level, text) {
@@ -108,11 +141,12 @@ fn remember(level: sys::f2s_log_level, text: &str) {
     }
 }
 
+#[cfg(feature = "kinect2")]
 extern "C" fn forward(
     level: i32,
     message: *const std::ffi::c_char,
     length: usize,
-    _user: *mut c_void,
+    _user: *mut std::ffi::c_void,
 ) {
     if message.is_null() {
         return;
@@ -122,48 +156,58 @@ extern "C" fn forward(
     let bytes = unsafe { std::slice::from_raw_parts(message.cast::<u8>(), length) };
     let text = String::from_utf8_lossy(bytes);
     // Never unwind into C++: contain anything a subscriber might do.
-    let _ = std::panic::catch_unwind(|| {
-        let level = sys::f2s_log_level(level as u32);
-        remember(level, &text);
-        match level {
-            sys::f2s_log_level::F2S_LOG_ERROR => tracing::error!(target: LOG_TARGET, "{text}"),
-            sys::f2s_log_level::F2S_LOG_WARNING => tracing::warn!(target: LOG_TARGET, "{text}"),
-            sys::f2s_log_level::F2S_LOG_INFO => tracing::debug!(target: LOG_TARGET, "{text}"),
-            _ => tracing::trace!(target: LOG_TARGET, "{text}"),
-        }
-    });
+    let _ = std::panic::catch_unwind(|| log_line(LogLevel::from_code(level as u32), &text));
+}
+
+/// Remembers a line and passes it on to `tracing`.
+fn log_line(level: LogLevel, text: &str) {
+    remember(level, text);
+    match level {
+        LogLevel::Error => tracing::error!(target: LOG_TARGET, "{text}"),
+        LogLevel::Warning => tracing::warn!(target: LOG_TARGET, "{text}"),
+        LogLevel::Info => tracing::debug!(target: LOG_TARGET, "{text}"),
+        _ => tracing::trace!(target: LOG_TARGET, "{text}"),
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn log_line(level: sys::f2s_log_level, text: &str) {
+    /// A line as libfreenect2 would log it: through the C callback with
+    /// the library, straight to what it calls without.
+    fn log_line(level: LogLevel, text: &str) {
+        #[cfg(feature = "kinect2")]
         forward(
-            level.0 as i32,
+            match level {
+                LogLevel::None => 0,
+                LogLevel::Error => 1,
+                LogLevel::Warning => 2,
+                LogLevel::Info => 3,
+                LogLevel::Debug => 4,
+            },
             text.as_ptr().cast(),
             text.len(),
             std::ptr::null_mut(),
         );
+        #[cfg(not(feature = "kinect2"))]
+        super::log_line(level, text);
     }
 
     #[test]
     fn another_threads_warning_is_not_this_threads_problem() {
         clear_last_problem();
         std::thread::spawn(|| {
-            log_line(
-                sys::f2s_log_level::F2S_LOG_WARNING,
-                "[UsbIsoTransferPool] usb transfer error",
-            )
+            log_line(LogLevel::Warning, "[UsbIsoTransferPool] usb transfer error")
         })
         .join()
         .expect("logging thread");
         assert_eq!(take_last_problem(), None);
         log_line(
-            sys::f2s_log_level::F2S_LOG_ERROR,
+            LogLevel::Error,
             "[Freenect2Impl] failed to open Kinect v2: LIBUSB_ERROR_ACCESS",
         );
-        log_line(sys::f2s_log_level::F2S_LOG_INFO, "[Freenect2Impl] opening");
+        log_line(LogLevel::Info, "[Freenect2Impl] opening");
         assert_eq!(
             take_last_problem().as_deref(),
             Some("[Freenect2Impl] failed to open Kinect v2: LIBUSB_ERROR_ACCESS")
@@ -175,19 +219,19 @@ mod tests {
     fn depth_decoder_errors_are_counted_from_any_thread() {
         let (before, _) = depth_pipeline_errors();
         let line = "[OpenCLDepthPacketProcessor] OpenCLDepthPacketProcessor is not initialized!";
-        std::thread::spawn(move || log_line(sys::f2s_log_level::F2S_LOG_ERROR, line))
+        std::thread::spawn(move || log_line(LogLevel::Error, line))
             .join()
             .expect("logging thread");
         let (after, last) = depth_pipeline_errors();
         assert!(after > before);
         assert_eq!(last.as_deref(), Some(line));
-        let error = sys::f2s_log_level::F2S_LOG_ERROR;
+        let error = LogLevel::Error;
         assert!(is_depth_pipeline_error(
             error,
             "[CudaDepthPacketProcessorImpl] No CUDA device found"
         ));
         assert!(!is_depth_pipeline_error(
-            sys::f2s_log_level::F2S_LOG_WARNING,
+            LogLevel::Warning,
             "[OpenCLDepthPacketProcessor] slow"
         ));
         assert!(!is_depth_pipeline_error(

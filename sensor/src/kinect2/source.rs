@@ -18,85 +18,23 @@
 
 use std::time::{Duration, Instant};
 
-use slope_ipc_types::{CloudSource, Mount};
+use slope_ipc_types::CloudSource;
 
+use super::choice::{DeviceSelector, Pipeline};
+use super::clock::DeviceClock;
 use super::convert::{unmirror_color, unmirror_depth, unmirrored_intrinsics, DEPTH_UNIT_M};
-use super::device::{
-    Context, DepthConfig, Device, DeviceSelector, FrameFormat, FrameSet, FrameView, IrParams,
-    Pipeline, Streams, COLOR_HEIGHT, COLOR_WIDTH, DEPTH_HEIGHT, DEPTH_WIDTH,
-};
+use super::device::{Context, Device, FrameSet, Streams};
 use super::error::Kinect2Error;
+use super::frame::{check_layout, FrameFormat, FrameView};
 use super::log::depth_pipeline_errors;
-use super::registration::{Registration, DEPTH_PIXELS};
+use super::options::{CaptureStats, Kinect2Options, SENSOR_NAME};
+use super::params::{IrParams, COLOR_HEIGHT, COLOR_WIDTH, DEPTH_HEIGHT, DEPTH_PIXELS, DEPTH_WIDTH};
+use super::registration::Registration;
 use crate::interruptible::run_interruptible;
 use crate::missing_depth::MissingDepthDetector;
 use crate::publish::StopFlag;
 use crate::recording::ColorImage;
 use crate::source::{FrameSource, SourceError, SourceFrame, SourceInfo};
-
-/// How to run the Kinect v2.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Kinect2Options {
-    pub device: DeviceSelector,
-    pub pipeline: Pipeline,
-    /// OpenCL/CUDA device id; `None` for libfreenect2's default.
-    pub gpu_device: Option<u32>,
-    pub depth: DepthConfig,
-    /// Also stream colour and register it to the depth image.
-    pub color: bool,
-    /// Drop colour pixels hidden behind nearer depth (libfreenect2's
-    /// registration filter).
-    pub registration_filter: bool,
-    /// The camera's pose on the robot, passed on with every cloud.
-    pub mount: Mount,
-    /// Keep retrying when no device is connected instead of failing.
-    pub wait_for_device: bool,
-    /// No frame for this long means the device is lost: reconnect.
-    pub frame_timeout: Duration,
-    /// First wait between reconnection attempts; doubles up to
-    /// `max_backoff`.
-    pub min_backoff: Duration,
-    pub max_backoff: Duration,
-}
-
-impl Default for Kinect2Options {
-    fn default() -> Self {
-        Self {
-            device: DeviceSelector::First,
-            pipeline: Pipeline::Default,
-            gpu_device: None,
-            depth: DepthConfig::default(),
-            color: true,
-            registration_filter: true,
-            mount: Mount::UNKNOWN,
-            wait_for_device: false,
-            frame_timeout: Duration::from_secs(3),
-            min_backoff: Duration::from_millis(500),
-            max_backoff: Duration::from_secs(10),
-        }
-    }
-}
-
-/// What happened to the stream so far.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct CaptureStats {
-    /// Frame sets delivered as frames.
-    pub frames: u64,
-    /// Frame sets skipped because a frame had a non-zero status.
-    pub bad_status: u64,
-    /// Frame sets skipped because a frame was missing or misshapen.
-    pub malformed: u64,
-    /// Times the device was declared lost (no frame within the timeout).
-    pub lost: u64,
-    /// Successful reopenings after a loss.
-    pub reconnects: u64,
-    /// Failed attempts to (re)open a device.
-    pub failed_opens: u64,
-}
-
-/// The sensor name of the Kinect v2's frames (a recording's `sensor`, a
-/// cloud header's `sensor`).
-pub const SENSOR_NAME: &str = "kinect2";
 
 /// Slice of every blocking wait, so that a stop request is seen quickly.
 pub const WAIT_SLICE: Duration = Duration::from_millis(200);
@@ -247,7 +185,7 @@ impl Kinect2Source {
 
     /// Tries to reopen the device after a loss, waiting the current backoff
     /// first. Returns false if stopped; fails on errors that retrying
-    /// cannot cure (see [`is_retryable`]).
+    /// cannot cure (see [`Kinect2Error::is_retryable`]).
     fn reconnect(&mut self) -> Result<bool, Kinect2Error> {
         if !sleep_watched(&self.stop, self.backoff, &mut self.on_wait, &self.stats) {
             return Ok(false);
@@ -284,7 +222,7 @@ impl Kinect2Source {
                     "Kinect v2 reconnected"
                 );
             }
-            Err(err) if !is_retryable(&err) => return Err(err),
+            Err(err) if !err.is_retryable() => return Err(err),
             Err(err) => {
                 self.stats.failed_opens += 1;
                 let next = (self.backoff * 2).min(self.options.max_backoff);
@@ -424,7 +362,7 @@ fn start_waiting(
         };
         match started {
             Ok(running) => return Ok(Some(running)),
-            Err(err) if options.wait_for_device && is_retryable(&err) => {
+            Err(err) if options.wait_for_device && err.is_retryable() => {
                 stats.failed_opens += 1;
                 tracing::warn!(error = %err, retry_in = ?backoff, "waiting for a Kinect v2");
                 if !sleep_watched(stop, backoff, on_wait, stats) {
@@ -516,80 +454,6 @@ fn register_images(
     Ok(Some(color.format()))
 }
 
-/// Fails unless `view` is `width x height` 4-byte pixels in a format `ok`
-/// accepts.
-fn check_layout(
-    serial: &str,
-    view: &FrameView<'_>,
-    width: usize,
-    height: usize,
-    what: &str,
-    ok: impl Fn(FrameFormat) -> bool,
-) -> Result<(), Kinect2Error> {
-    if view.width() == width
-        && view.height() == height
-        && view.bytes_per_pixel() == 4
-        && ok(view.format())
-    {
-        return Ok(());
-    }
-    Err(Kinect2Error::UnexpectedFrame {
-        serial: serial.to_string(),
-        what: format!(
-            "{what} frame of {} x {} x {} bytes in format {:?}, expected {width} x {height} x 4 \
-             (is libfreenect2's colour decoding built in?)",
-            view.width(),
-            view.height(),
-            view.bytes_per_pixel(),
-            view.format()
-        ),
-    })
-}
-
-/// Units of the device clock.
-const DEVICE_TICK_NS: u64 = 125_000;
-
-/// Turns the device's 32-bit clock (0.125 ms units; wraps after about 6.2
-/// days, restarts when the device does) into a 64-bit nanosecond time that
-/// never goes backwards.
-#[derive(Debug, Default)]
-pub(crate) struct DeviceClock {
-    /// The last raw stamp and the time it became.
-    last: Option<(u32, u64)>,
-    /// Set by [`DeviceClock::restart`]: the next stamp continues the time
-    /// by this gap, whatever the device's clock says.
-    restart_gap_ns: Option<u64>,
-}
-
-impl DeviceClock {
-    pub(crate) fn stamp(&mut self, raw: u32) -> u64 {
-        let ns = match (self.last, self.restart_gap_ns.take()) {
-            (None, _) => u64::from(raw) * DEVICE_TICK_NS,
-            (Some((_, last_ns)), Some(gap)) => last_ns.saturating_add(gap.max(1)),
-            (Some((last_raw, last_ns)), None) => {
-                // The forward distance modulo 2^32 ticks, so a wrap just
-                // continues; a "forward" jump of more than half the range
-                // is the clock going backwards (a reset): one tick on.
-                let ahead = raw.wrapping_sub(last_raw);
-                if ahead < 1 << 31 {
-                    last_ns.saturating_add(u64::from(ahead) * DEVICE_TICK_NS)
-                } else {
-                    tracing::warn!(raw, last_raw, "the Kinect v2 clock went backwards");
-                    last_ns.saturating_add(DEVICE_TICK_NS)
-                }
-            }
-        };
-        self.last = Some((raw, ns));
-        ns
-    }
-
-    /// The device was reopened (its clock restarts): the next stamp is the
-    /// last one plus `gap`.
-    pub(crate) fn restart(&mut self, gap: Duration) {
-        self.restart_gap_ns = Some(u64::try_from(gap.as_nanos()).unwrap_or(u64::MAX));
-    }
-}
-
 impl FrameSource for Kinect2Source {
     fn info(&self) -> &SourceInfo {
         &self.info
@@ -664,21 +528,6 @@ impl Drop for Kinect2Source {
     }
 }
 
-/// Errors worth retrying while waiting for a device (and when reopening
-/// it): it may appear, come back after its reset, or be let go by the
-/// process that holds it.
-fn is_retryable(err: &Kinect2Error) -> bool {
-    matches!(
-        err,
-        Kinect2Error::NoDevice { .. }
-            | Kinect2Error::SerialNotFound { .. }
-            | Kinect2Error::IndexOutOfRange { .. }
-            | Kinect2Error::Operation { .. }
-            | Kinect2Error::Locked(_)
-            | Kinect2Error::SerialMismatch { .. }
-    )
-}
-
 /// Opens, configures and starts a device, and builds its registration from
 /// the parameters it reports once started.
 fn start_device(
@@ -707,53 +556,4 @@ fn start_device(
         registration,
         last_frame: Instant::now(),
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    const TICK: u64 = DEVICE_TICK_NS;
-
-    #[test]
-    fn the_device_clock_runs_on_through_a_wrap() {
-        let mut clock = DeviceClock::default();
-        let start = u32::MAX - 266;
-        let first = clock.stamp(start);
-        assert_eq!(first, u64::from(start) * TICK);
-        // 266 ticks later the u32 has wrapped to 0; then 266 more.
-        assert_eq!(clock.stamp(u32::MAX), first + 266 * TICK);
-        assert_eq!(clock.stamp(266), first + 533 * TICK);
-        assert_eq!(clock.stamp(532), first + 799 * TICK);
-    }
-
-    #[test]
-    fn the_device_clock_never_goes_back() {
-        let mut clock = DeviceClock::default();
-        assert_eq!(clock.stamp(10_000), 10_000 * TICK);
-        // A reset without a reopen: one tick on, then onwards from there.
-        assert_eq!(clock.stamp(100), 10_001 * TICK);
-        assert_eq!(clock.stamp(366), 10_267 * TICK);
-        // A reopen: the gap in wall time, whatever the new clock says.
-        clock.restart(Duration::from_millis(1500));
-        let after = clock.stamp(5);
-        assert_eq!(after, 10_267 * TICK + 1_500_000_000);
-        assert_eq!(clock.stamp(271), after + 266 * TICK);
-    }
-
-    #[test]
-    fn only_lasting_errors_end_the_stream() {
-        assert!(is_retryable(&Kinect2Error::SerialNotFound {
-            serial: "1".into(),
-            connected: Vec::new(),
-        }));
-        assert!(!is_retryable(&Kinect2Error::InvalidParams("x".into())));
-        assert!(!is_retryable(&Kinect2Error::AlreadyOpen {
-            serial: "1".into()
-        }));
-        assert!(is_retryable(&Kinect2Error::SerialMismatch {
-            requested: "1".into(),
-            opened: "2".into(),
-        }));
-    }
 }

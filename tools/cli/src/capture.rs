@@ -1,30 +1,38 @@
 //! `slope-capture`: the Kinect v2 daemon. Opens the camera through our
 //! libfreenect2 binding and publishes every frame as an organised cloud on
 //! the same service, in the same layout, as `slope-replay`.
+//!
+//! The arguments and settings (the config file under the flags, the device
+//! options, the exit status of a failure) need no library and build
+//! without the `kinect2` feature; opening the camera and capturing need it.
 
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use anyhow::Context;
 use clap::Parser;
-use slope_ipc_types::{HealthComponent, ServiceNames, DEFAULT_MAX_CLOUD_POINTS};
-use slope_sensor::device_lock::DeviceLock;
-use slope_sensor::ipc::{create_node, CloudPublisher, HealthPublisher};
-use slope_sensor::kinect2::{
-    library_version, CaptureStats, Context as Freenect2, DepthConfig, DeviceSelector,
-    Kinect2Options, Kinect2Source, Pipeline, LOCK_KIND,
-};
-use slope_sensor::publish::{Pacing, PublishOptions, PublishStats, StopFlag};
-use slope_sensor::source::FrameSource;
+use slope_ipc_types::DEFAULT_MAX_CLOUD_POINTS;
+use slope_sensor::kinect2::{CaptureStats, DepthConfig, DeviceSelector, Kinect2Options, Pipeline};
+use slope_sensor::publish::{PublishStats, StopFlag};
 
-use crate::capture_notify::{publish_notifying, CaptureNotifier, SharedNotifier, SourceCounters};
-
-use crate::cli::{max_frames_arg, node_name, CommonArgs};
+use crate::cli::{max_frames_arg, CommonArgs};
 use crate::config_file::{config_path, is_config_error, SlopeFile, DEFAULT_CONFIG_PATH};
 use crate::estimator::health_interval_arg;
-use crate::health::HealthReporter;
 use crate::mount_args::MountArgs;
 use crate::replay::positive_f64;
+
+#[cfg(feature = "kinect2")]
+use {
+    crate::capture_notify::{publish_notifying, CaptureNotifier, SharedNotifier, SourceCounters},
+    crate::cli::node_name,
+    crate::health::HealthReporter,
+    slope_ipc_types::{HealthComponent, ServiceNames},
+    slope_sensor::device_lock::DeviceLock,
+    slope_sensor::ipc::{create_node, CloudPublisher, HealthPublisher},
+    slope_sensor::kinect2::{library_version, Context as Freenect2, Kinect2Source, LOCK_KIND},
+    slope_sensor::publish::{Pacing, PublishOptions},
+    slope_sensor::source::FrameSource,
+};
 
 #[derive(Debug, Parser)]
 #[command(
@@ -238,6 +246,7 @@ pub struct CaptureOutcome {
 /// opening the device, which resets it: a device whose lock another process
 /// holds is listed without opening it (`firmware unknown (in use by PID
 /// n)`).
+#[cfg(feature = "kinect2")]
 pub fn list_devices() -> anyhow::Result<Vec<String>> {
     let context = Freenect2::new().context("cannot start libfreenect2")?;
     let serials = context
@@ -262,6 +271,7 @@ pub fn list_devices() -> anyhow::Result<Vec<String>> {
 }
 
 /// The firmware version of `serial`, or why it is unknown.
+#[cfg(feature = "kinect2")]
 fn firmware_of(context: &Freenect2, lock_dir: &Path, serial: &str) -> String {
     if let Some(pid) = DeviceLock::holder_in(lock_dir, LOCK_KIND, serial) {
         let pid = pid.map_or_else(|| "unknown".to_string(), |pid| pid.to_string());
@@ -308,6 +318,7 @@ pub fn config_exit_code(err: &anyhow::Error) -> Option<u8> {
 }
 
 /// The counters of the status line.
+#[cfg(feature = "kinect2")]
 fn counters(stats: &CaptureStats) -> SourceCounters {
     SourceCounters {
         dropped: stats.bad_status + stats.malformed,
@@ -321,6 +332,7 @@ fn counters(stats: &CaptureStats) -> SourceCounters {
 /// `READY=1` after the first published cloud, the watchdog from every wait,
 /// a status line a second, `STATUS=failed: ...` and `STOPPING=1` on the way
 /// out. Outside systemd the notifications go nowhere.
+#[cfg(feature = "kinect2")]
 pub fn run(args: &CaptureArgs, stop: &StopFlag) -> anyhow::Result<CaptureOutcome> {
     if args.print_config {
         let Some(file) = effective_config(args, stop)? else {
@@ -346,6 +358,7 @@ pub fn run(args: &CaptureArgs, stop: &StopFlag) -> anyhow::Result<CaptureOutcome
     result
 }
 
+#[cfg(feature = "kinect2")]
 fn capture(
     args: &CaptureArgs,
     stop: &StopFlag,

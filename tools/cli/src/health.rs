@@ -88,7 +88,11 @@ pub struct HealthMonitor {
 
 impl HealthMonitor {
     pub fn new(component: HealthComponent) -> Self {
-        let now = Instant::now();
+        Self::new_at(component, Instant::now())
+    }
+
+    /// The same, started at `now` (a test's clock).
+    fn new_at(component: HealthComponent, now: Instant) -> Self {
         Self {
             component,
             started: now,
@@ -156,7 +160,11 @@ impl HealthMonitor {
     /// The report over the window since the last report (which it starts
     /// anew).
     pub fn report(&mut self) -> Health {
-        let now = Instant::now();
+        self.report_at(Instant::now())
+    }
+
+    /// The same, made at `now` (a test's clock).
+    fn report_at(&mut self, now: Instant) -> Health {
         let mut health = self.snapshot(now);
         self.report.close_into(&mut health, now);
         health
@@ -326,7 +334,9 @@ mod tests {
 
     #[test]
     fn a_report_holds_the_window_and_the_totals() {
-        let mut m = HealthMonitor::new(HealthComponent::Estimator);
+        // An injected clock: the window is exactly half a second.
+        let started = Instant::now();
+        let mut m = HealthMonitor::new_at(HealthComponent::Estimator, started);
         m.frames_in(3);
         m.dropped(1);
         for k in 1..=2 {
@@ -337,7 +347,7 @@ mod tests {
             );
         }
         m.error("cloud service gone");
-        let h = m.report();
+        let h = m.report_at(started + Duration::from_millis(500));
         assert_eq!(h.component(), Some(HealthComponent::Estimator));
         assert_eq!(h.pid, std::process::id());
         assert_eq!((h.frames_in, h.frames_out, h.frames_dropped), (3, 2, 1));
@@ -347,11 +357,16 @@ mod tests {
         let total = h.stage("total").unwrap();
         assert_eq!((total.median_ms, total.max_ms, total.count), (3.0, 6.0, 2));
         assert_eq!((h.latency.median_ms, h.latency.max_ms), (10.0, 20.0));
-        assert!(h.rate_in_hz > 0.0 && h.rate_out_hz > 0.0);
+        // 3 frames in and 2 out over 0.5 s.
+        assert_eq!(h.window_ms, 500);
+        assert_eq!((h.rate_in_hz, h.rate_out_hz), (6.0, 4.0));
+        assert_eq!(h.uptime_ms, 500);
 
         // The next window starts empty; the totals go on.
         m.frames_in(1);
-        let h = m.report();
+        let h = m.report_at(started + Duration::from_millis(750));
+        assert_eq!(h.window_ms, 250);
+        assert_eq!((h.rate_in_hz, h.rate_out_hz), (4.0, 0.0));
         assert_eq!((h.frames_in, h.frames_out), (4, 2));
         assert_eq!(h.stage("total").unwrap().count, 0);
         assert_eq!(h.latency.count, 0);

@@ -2,7 +2,6 @@
 //! `main` (parse, set up logging, call `run`); the logic lives in one module
 //! per program here, so that it can be read and tested without a process.
 
-#[cfg(feature = "kinect2")]
 pub mod capture;
 pub mod capture_notify;
 pub mod cli;

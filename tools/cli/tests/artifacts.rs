@@ -376,7 +376,40 @@ fn an_unreadable_colour_image_is_a_counted_warning() {
         stderr.contains("1 frame(s) converted without colour"),
         "{stderr}"
     );
-    assert!(out.is_file());
+    // The frame's cloud is there, one point per measured pixel of its
+    // depth image, every one with rgb 0.
+    let bytes = std::fs::read(&out).expect("mcap file");
+    let mut clouds = Vec::new();
+    let mut depths = Vec::new();
+    for message in mcap::MessageStream::new(&bytes).expect("an MCAP file") {
+        let message = message.expect("a message");
+        let value: Value = serde_json::from_slice(&message.data).expect("JSON message");
+        match message.channel.topic.as_str() {
+            "/slope/cloud" => clouds.push(value),
+            "/slope/depth" => depths.push(value),
+            _ => {}
+        }
+    }
+    assert_eq!((clouds.len(), depths.len()), (1, 1));
+    let b64 = base64::engine::general_purpose::STANDARD;
+    let depth = b64
+        .decode(depths[0]["data"].as_str().expect("data"))
+        .expect("base64");
+    let measured = depth.chunks_exact(2).filter(|d| d != &[0, 0]).count();
+    assert!(measured > 0, "the depth image has readings");
+    let points = b64
+        .decode(clouds[0]["data"].as_str().expect("data"))
+        .expect("base64");
+    assert_eq!(
+        points.len(),
+        measured * 16,
+        "one 16-byte point per measured pixel"
+    );
+    let rgb: Vec<u32> = points
+        .chunks_exact(16)
+        .map(|p| u32::from_le_bytes([p[12], p[13], p[14], p[15]]))
+        .collect();
+    assert!(rgb.iter().all(|&c| c == 0), "a point with colour");
 }
 
 #[test]

@@ -4,6 +4,8 @@
 
 use std::process::Command;
 
+use slope_test_support::{require, Requirement};
+
 fn run(bin: &str, args: &[&str]) -> (bool, String, String) {
     let output = Command::new(bin)
         .args(args)
@@ -330,13 +332,20 @@ fn the_clients_prefix_help_names_no_config_flag() {
 /// A subscriber started as another user than the slope processes (the
 /// first mistake the one-user trust model invites) is told so: iceoryx2's
 /// root path belongs to that user. It said "failed to create the node on
-/// service '...': InternalError". Needs root (to run as `nobody`).
+/// service '...': InternalError". Needs root (to run as `nobody`): a skip
+/// elsewhere, a failure in CI (`.ci/run` runs it as root).
 #[test]
 fn another_user_is_told_whose_files_iceoryx2_keeps() {
     let uid = Command::new("id").arg("-u").output().map(|o| o.stdout);
     let root = uid.is_ok_and(|id| id.trim_ascii() == b"0");
-    if !root || Command::new("runuser").arg("--help").output().is_err() {
-        eprintln!("skipped: needs root and runuser to start a program as nobody");
+    let found = if !root {
+        Err("not running as root (to start a program as nobody)".to_string())
+    } else if Command::new("runuser").arg("--help").output().is_err() {
+        Err("runuser does not run".to_string())
+    } else {
+        Ok(())
+    };
+    if require(Requirement::Root, found).is_none() {
         return;
     }
     let echo = env!("CARGO_BIN_EXE_slope-echo");

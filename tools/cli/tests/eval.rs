@@ -879,6 +879,22 @@ fn render_frame_picks_the_frame_and_an_unknown_one_fails() {
         "2",
     ]);
     assert!(out.success, "{}", out.stderr);
+    // The chosen frame's picture and nothing else.
+    let written = |dir: &Path| -> Vec<String> {
+        let mut names: Vec<String> = std::fs::read_dir(dir)
+            .expect("the render directory")
+            .map(|entry| {
+                entry
+                    .expect("an entry")
+                    .file_name()
+                    .into_string()
+                    .expect("utf-8")
+            })
+            .collect();
+        names.sort();
+        names
+    };
+    assert_eq!(written(&out_dir), ["ramp-tls-frame000002.png"]);
     assert!(out_dir.join("ramp-tls-frame000002.png").is_file());
     let out = eval(&[
         path_str(&rec),

@@ -77,12 +77,7 @@ fn depth_from_a_projected_cloud_is_the_original_to_the_count() {
 
 #[test]
 fn recording_a_source_reproduces_it() {
-    let Some(src) = ["../../../shared/data/kinect2-stairs-front"]
-        .iter()
-        .map(|p| std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(p))
-        .find(|p| p.is_dir())
-    else {
-        eprintln!("shared/data is not here; nothing to record");
+    let Some(src) = slope_test_support::shared_data("kinect2-stairs-front") else {
         return;
     };
     let recording = Recording::open(&src).expect("source recording");
@@ -290,17 +285,37 @@ fn zero_frames_is_refused_and_the_pipeline_is_parsed_early() {
             std::iter::once("slope-record").chain(args.iter().copied()),
         )
     };
-    assert!(parse(&["out", "--max-frames", "0"]).is_err());
+    let kind = |args: &[&str]| parse(args).expect_err("refused").kind();
+    assert_eq!(
+        kind(&["out", "--max-frames", "0"]),
+        clap::error::ErrorKind::ValueValidation
+    );
+    let zero = parse(&["out", "--max-frames", "0"]).expect_err("refused");
+    assert!(
+        zero.to_string().contains(crate::cli::MAX_FRAMES_ZERO),
+        "{zero}"
+    );
     assert!(parse(&["out", "--max-frames", "1"]).is_ok());
     let flag = parse(&["-o", "out1"]).expect("-o");
     assert_eq!(flag.out_dir(), Path::new("out1"));
     let positional = parse(&["out2"]).expect("positional");
     assert_eq!(positional.out_dir(), Path::new("out2"));
-    assert!(parse(&[]).is_err(), "no output");
-    assert!(parse(&["-o", "a", "b"]).is_err(), "two outputs");
+    assert_eq!(
+        kind(&[]),
+        clap::error::ErrorKind::MissingRequiredArgument,
+        "no output"
+    );
+    assert_eq!(
+        kind(&["-o", "a", "b"]),
+        clap::error::ErrorKind::ArgumentConflict,
+        "two outputs"
+    );
     #[cfg(feature = "kinect2")]
     {
-        assert!(parse(&["out", "--pipeline", "vulkan"]).is_err());
+        assert_eq!(
+            kind(&["out", "--pipeline", "vulkan"]),
+            clap::error::ErrorKind::ValueValidation
+        );
         let args = parse(&["out", "--pipeline", "cpu"]).expect("args");
         assert_eq!(args.pipeline, Some(slope_sensor::kinect2::Pipeline::Cpu));
     }
