@@ -9,7 +9,8 @@
 //! `cargo run --release -p slope-pipeline --example gentle_ramps` prints the
 //! table (the pipeline README's "The smallest slope found");
 //! `... --example gentle_ramps -- FRAME HINGE_M ANGLE_DEG` prints every
-//! surface of that bent frame at each seed instead.
+//! surface of that bent frame at each seed instead (`CONFIG=toml` runs it
+//! with that estimator config).
 
 #[path = "../tests/common/mod.rs"]
 mod common;
@@ -19,6 +20,7 @@ mod bent;
 
 use std::path::Path;
 
+use slope_pipeline::EstimatorConfig;
 use slope_synth::bend::{bend_recording, BendParams};
 use slope_synth::BendError;
 
@@ -120,8 +122,12 @@ fn print_surfaces(name: &str, hinge: f64, angle: f64) {
     );
     let frame = bent::project(&b);
     let ramp = bent::ramp_normal(&b);
+    let config = match std::env::var("CONFIG") {
+        Ok(text) => EstimatorConfig::from_toml_str(&text).expect("CONFIG"),
+        Err(_) => EstimatorConfig::default(),
+    };
     for seed in SEEDS {
-        let e = bent::estimate(&frame, seed);
+        let e = bent::estimate_with(config.clone(), &frame, seed);
         let v = bent::judge(&e, &b, ramp);
         println!(
             "seed {seed}: {} {:.2} deg, road {:?}, bent part {} (plane {:.2} deg off the ramp's, {:.3} m from the hinge line), error {:+.2} (the ramp's plane {:.2} deg from this ground)",
@@ -134,6 +140,13 @@ fn print_surfaces(name: &str, hinge: f64, angle: f64) {
             v.error_deg,
             v.ramp_to_ground_deg
         );
+        if let (Some(g), Some(i)) = (&e.ground, &e.inclined) {
+            let n = |c: [f64; 4]| nalgebra::Vector3::new(c[0], c[1], c[2]);
+            println!(
+                "  the estimate's inclined plane is {:.2} deg from its ground plane",
+                n(g.coefficients).angle(&n(i.coefficients)).to_degrees()
+            );
+        }
         print!("{}", bent::surfaces(&e));
     }
 }

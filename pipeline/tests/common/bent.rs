@@ -63,7 +63,12 @@ pub fn bend(dir: &std::path::Path, angle_deg: f64, hinge_m: f64) -> BentFrame {
 
 /// The estimate of `frame` with the default config for its sensor at `seed`.
 pub fn estimate(frame: &Frame, seed: u64) -> Estimate {
-    let config = EstimatorConfig::default().for_sensor(&frame.sensor);
+    estimate_with(EstimatorConfig::default(), frame, seed)
+}
+
+/// The estimate of `frame` with `config` (made for its sensor) at `seed`.
+pub fn estimate_with(config: EstimatorConfig, frame: &Frame, seed: u64) -> Estimate {
+    let config = config.for_sensor(&frame.sensor);
     Estimator::new(EstimatorConfig { seed, ..config }).estimate(&frame.view())
 }
 
