@@ -13,7 +13,7 @@ use slope_sensor::recording::PngCompression;
 
 use crate::recording::{write_recording_with, RecordingSummary, WriteOptions};
 use crate::scene::{self, load_scene_file, Ramp, Scene, SlopeDirection, ValueRule};
-use crate::sensor_model::SensorModel;
+use crate::sensor_model::{RangeBias, SensorModel};
 
 const EXAMPLES: &str = "\
 Examples:
@@ -28,6 +28,10 @@ Examples:
 
   # A wall 2 m ahead, seen at a 20° yaw, driving towards it at 0.3 m/s
   slope-synth --slope 90 --distance 2 --yaw 20 --speed-mps 0.3 -o /tmp/wall
+
+  # A flat floor read with the Kinect v1's range bias (depth z + k z^2: the floor
+  # seen z metres ahead lies 0.01 z below the truth), exact otherwise
+  slope-synth --slope 0 --mount-height-m 1.2 --mount-pitch-deg -30 --clean --range-bias kinect1 -o /tmp/bent
 
   # Everything else (boxes, side walls, tables, a ceiling, soft blocks, sensor
   # parameters) from a scene file; flags given on the command line override it
@@ -145,6 +149,14 @@ pub struct Args {
     #[arg(long)]
     pub clean: bool,
 
+    /// The sensor's range bias: none, kinect2 or kinect1. Each depth z is
+    /// read as z + k z^2 along its ray, k = c / (camera height), so a flat
+    /// floor seen z ahead lies c z below the truth (c = 0.005 kinect2, 0.01
+    /// kinect1: the pipeline's floor height bias). Overrides the scene
+    /// file's `[sensor] range_bias`; applies after --clean.
+    #[arg(long, value_enum, value_name = "SENSOR")]
+    pub range_bias: Option<RangeBias>,
+
     /// Write depth images only (no colour images).
     #[arg(long)]
     pub depth_only: bool,
@@ -207,6 +219,9 @@ impl Args {
         let mut model = file_model.unwrap_or_default();
         if self.clean {
             model = SensorModel::clean();
+        }
+        if let Some(bias) = self.range_bias {
+            model.range_bias = bias;
         }
         self.apply_camera_and_wall_flags(&mut scene);
         self.apply_ramp_flags(&mut scene)?;
@@ -491,6 +506,27 @@ mod tests {
         let ramp = down.ramp.expect("ramp");
         assert_eq!(ramp.direction, SlopeDirection::Descending);
         assert_eq!(ramp.slope_deg, 5.0);
+    }
+
+    #[test]
+    fn range_bias_flag_sets_the_model_after_clean() {
+        let (_, model) = parse(&["--clean", "--range-bias", "kinect1"])
+            .scene_and_model()
+            .expect("valid");
+        assert_eq!(model.range_bias, RangeBias::Kinect1);
+        assert!(!model.is_clean());
+        assert_eq!(
+            SensorModel {
+                range_bias: RangeBias::None,
+                ..model
+            },
+            SensorModel::clean()
+        );
+        let (_, model) = parse(&[]).scene_and_model().expect("valid");
+        assert_eq!(model.range_bias, RangeBias::None);
+        assert!(
+            Args::try_parse_from(["slope-synth", "-o", "x", "--range-bias", "kinect3"]).is_err()
+        );
     }
 
     #[test]

@@ -61,5 +61,5 @@ pub use scene::{
     load_scene_file, parse_scene, CameraModel, Ceiling, GroundBox, Motion, MountPose, Panel, Ramp,
     Scene, SceneFile, SideWall, SlopeDirection, SoftBlock, Table,
 };
-pub use sensor_model::{axial_sigma_m, SensorModel};
+pub use sensor_model::{axial_sigma_m, RangeBias, SensorModel};
 pub use world::World;

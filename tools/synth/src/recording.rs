@@ -115,7 +115,7 @@ pub fn frame_camera<R: Rng + ?Sized>(
 }
 
 /// The metadata of a recording of `scene`: the nominal mount (without
-/// jitter) and the exact slope.
+/// jitter; none when `[mount] recorded = false`) and the exact slope.
 pub fn recording_meta(scene: &Scene) -> RecordingMeta {
     let c = &scene.camera;
     RecordingMeta {
@@ -129,10 +129,14 @@ pub fn recording_meta(scene: &Scene) -> RecordingMeta {
             cx: c.cx,
             cy: c.cy,
         },
-        mount: MountInfo {
-            height_m: Some(scene.mount.height_m),
-            pitch_deg: Some(scene.mount.pitch_deg),
-            roll_deg: Some(scene.mount.roll_deg),
+        mount: if scene.mount.recorded {
+            MountInfo {
+                height_m: Some(scene.mount.height_m),
+                pitch_deg: Some(scene.mount.pitch_deg),
+                roll_deg: Some(scene.mount.roll_deg),
+            }
+        } else {
+            MountInfo::default()
         },
         truth: TruthInfo {
             slope_deg: scene.truth_slope_deg(),

@@ -7,7 +7,8 @@
 //!    model already covers the error);
 //! 2. flying pixels: at a depth discontinuity between two surfaces, the
 //!    reading is a random mixture of the two depths;
-//! 3. multipath: a bias near concave junctions, along the ray;
+//! 3. multipath: a bias near concave junctions, along the ray; then the
+//!    range bias, `z + k z^2` along the ray ([`crate::sensor_model::RangeBias`]);
 //! 4. axial noise: Gaussian in depth, `axial_sigma_m(z, incidence)`;
 //! 5. dropouts: at grazing incidence and at random;
 //! 6. range limits, then quantisation to [`DEPTH_UNIT_M`] (0 = no reading).
@@ -51,6 +52,11 @@ pub fn render_depth<R: Rng + ?Sized>(
         Vec::new()
     };
     let mut depth = DepthImage::new(width, height);
+    // The range bias's k for this frame's camera height (the world's
+    // ground is z = 0): 0 without a bias.
+    let bias_per_m = model
+        .range_bias
+        .depth_coefficient_per_m(camera.pose.position.z);
     for v in 0..height {
         for u in 0..width {
             let i = v as usize * width as usize + u as usize;
@@ -75,7 +81,7 @@ pub fn render_depth<R: Rng + ?Sized>(
             // Length of the ray per metre of depth, to turn path-length
             // errors into depth errors.
             let ray_per_depth = camera.ray(f64::from(u), f64::from(v)).direction.norm();
-            let z = measure(&hit, partner, ray_per_depth, world, model, rng);
+            let z = measure(&hit, partner, ray_per_depth, world, model, rng, bias_per_m);
             depth.data[i] = match z {
                 Some(z) => quantise(z),
                 None => 0,
@@ -86,7 +92,8 @@ pub fn render_depth<R: Rng + ?Sized>(
 }
 
 /// The noisy depth of one reading, `None` when it is dropped. `partner` is
-/// the depth across a discontinuity next to the pixel, if any.
+/// the depth across a discontinuity next to the pixel, if any;
+/// `bias_per_m` the range bias's `k` (`z + k z^2`, 0 for none).
 fn measure<R: Rng + ?Sized>(
     hit: &PixelHit,
     partner: Option<f64>,
@@ -94,6 +101,7 @@ fn measure<R: Rng + ?Sized>(
     world: &World,
     model: &SensorModel,
     rng: &mut R,
+    bias_per_m: f64,
 ) -> Option<f64> {
     let mut z = hit.z_m;
     if let Some(other_z) = partner {
@@ -105,6 +113,10 @@ fn measure<R: Rng + ?Sized>(
     if model.multipath_bias_m > 0.0 {
         // The bias lengthens the light path along the ray.
         z += world.multipath_bias_m(model, &hit.point, hit.surface) / ray_per_depth;
+    }
+    if bias_per_m != 0.0 {
+        // The range bias, along the ray: z' = z + k z^2.
+        z += bias_per_m * z * z;
     }
     let theta = hit.incidence_rad();
     if model.axial_noise {

@@ -86,6 +86,10 @@ pub struct MountPose {
     pub pitch_deg: f64,
     /// Rotation about the optical axis; positive dips the image's right side.
     pub roll_deg: f64,
+    /// Write `[mount]` into the recording (the default). `false`: the
+    /// camera still stands as above, but the recording has no `[mount]`,
+    /// so an estimator reading it runs without a mount.
+    pub recorded: bool,
 }
 
 impl Default for MountPose {
@@ -94,6 +98,7 @@ impl Default for MountPose {
             height_m: 0.5,
             pitch_deg: -20.0,
             roll_deg: 0.0,
+            recorded: true,
         }
     }
 }

@@ -48,6 +48,10 @@ pub struct SensorModel {
     pub jitter_roll_deg: f64,
     pub jitter_yaw_deg: f64,
     pub jitter_height_m: f64,
+    /// The sensor's range bias: a depth error that grows with depth and
+    /// bends a flat floor (`"none"`, `"kinect2"`, `"kinect1"`; see
+    /// [`RangeBias`]). Default none.
+    pub range_bias: RangeBias,
 }
 
 impl SensorModel {
@@ -70,6 +74,7 @@ impl SensorModel {
         jitter_roll_deg: 0.2,
         jitter_yaw_deg: 0.1,
         jitter_height_m: 0.002,
+        range_bias: RangeBias::None,
     };
 
     /// Exact geometry: every effect off. Only the quantisation to the
@@ -102,6 +107,7 @@ impl SensorModel {
             && !self.grazing_dropout
             && self.random_dropout_probability == 0.0
             && !self.has_jitter()
+            && self.range_bias == RangeBias::None
     }
 
     /// True when the camera pose varies from frame to frame.
@@ -197,6 +203,84 @@ fn invalid(key: &str, reason: &str) -> SceneError {
     }
 }
 
+/// A depth sensor's range bias: every reading lies a little too far (or
+/// too near) along its ray, by an amount that grows with depth, so a flat
+/// floor seen far away lies below (or above) the floor under the camera.
+///
+/// The model: a point at true depth `z` (along the optical axis) is read
+/// at `z' = z + k z^2`, moved along its own ray (every coordinate scaled by
+/// `1 + k z`). Seen from a camera `h` above a flat floor, a floor point at
+/// depth `z` is then read `k z h` below the floor (its height below the
+/// camera scales by `1 + k z`). With `k = c / h`, `c` the coefficient of
+/// the pipeline's `NoiseModel::floor_height_bias_m` (`c z`: Kinect v2
+/// `c = 0.005`, Kinect v1 `c = 0.01`), the floor at depth `z` lies exactly
+/// that bound, `c z`, below the true floor (a test in
+/// `tests/tests/real_scene_rules.rs` ties the coefficients to the
+/// pipeline's). Since the offset is linear in depth, the floor stays nearly
+/// a plane, turned by about `c cos(pitch)` radians (Kinect v1 at 30°
+/// down: 0.50°) against the true floor: the height bound is reached, the
+/// bend bound (`NoiseModel::floor_bend_deg`, 1.3-2.2° and 4°) is not; the
+/// bend between pieces of the floor near and far is a few hundredths of a
+/// degree (the `k^2` term). `k` depends on the camera's height in each
+/// frame: the bias is made for the scene, not a property of the sensor
+/// alone.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum RangeBias {
+    /// No range bias (the default: every recording before the bias existed).
+    #[default]
+    None,
+    /// The Kinect v2 (time of flight) bound: 5 mm per metre of depth.
+    Kinect2,
+    /// The Kinect v1 (structured light) bound: 10 mm per metre of depth,
+    /// the largest.
+    Kinect1,
+}
+
+impl RangeBias {
+    /// `c`: how far below the true floor a flat floor seen at depth `z`
+    /// is read, per metre of depth (the pipeline's
+    /// `NoiseModel::floor_height_bias_m(z) / z`).
+    pub fn height_bias_per_m(self) -> f64 {
+        match self {
+            Self::None => 0.0,
+            Self::Kinect2 => 0.005,
+            Self::Kinect1 => 0.01,
+        }
+    }
+
+    /// How far below the true floor a flat floor seen `z_m` ahead (depth
+    /// along the optical axis) is read, metres: `c z`.
+    pub fn floor_height_bias_m(self, z_m: f64) -> f64 {
+        self.height_bias_per_m() * z_m.max(0.0)
+    }
+
+    /// `k = c / h` of a camera `camera_height_m` above the floor, per metre.
+    pub fn depth_coefficient_per_m(self, camera_height_m: f64) -> f64 {
+        if camera_height_m > 0.0 {
+            self.height_bias_per_m() / camera_height_m
+        } else {
+            0.0
+        }
+    }
+
+    /// The depth read for a true depth `z_m` by a camera `camera_height_m`
+    /// above the floor: `z + k z^2`.
+    pub fn biased_depth_m(self, z_m: f64, camera_height_m: f64) -> f64 {
+        let k = self.depth_coefficient_per_m(camera_height_m);
+        z_m + k * z_m * z_m
+    }
+
+    /// The name in a scene file and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::None => "none",
+            Self::Kinect2 => "kinect2",
+            Self::Kinect1 => "kinect1",
+        }
+    }
+}
+
 /// Largest incidence angle the noise formula is evaluated at (it diverges
 /// at 90°); steeper readings are normally dropped as grazing anyway.
 const MAX_NOISE_INCIDENCE_RAD: f64 = 89.0 * std::f64::consts::PI / 180.0;
@@ -247,6 +331,27 @@ mod tests {
         let mid = m.grazing_dropout_probability(81.5f64.to_radians());
         assert!((mid - 0.5).abs() < 1e-9);
         assert_eq!(SensorModel::clean().grazing_dropout_probability(1.5), 0.0);
+    }
+
+    #[test]
+    fn range_bias_puts_the_floor_c_z_below_the_truth() {
+        // A floor point at depth z seen from height h: its height below the
+        // camera scales with the depth, h (1 + k z) = h + c z.
+        for bias in [RangeBias::Kinect2, RangeBias::Kinect1] {
+            for (h, z) in [(0.5, 1.0), (1.2, 3.0), (1.35, 4.5)] {
+                let scale = bias.biased_depth_m(z, h) / z;
+                let below = h * scale - h;
+                assert!((below - bias.floor_height_bias_m(z)).abs() < 1e-12);
+            }
+        }
+        assert_eq!(RangeBias::None.biased_depth_m(2.0, 1.0), 2.0);
+        assert!((RangeBias::Kinect1.floor_height_bias_m(3.0) - 0.03).abs() < 1e-15);
+        assert!((RangeBias::Kinect2.floor_height_bias_m(3.0) - 0.015).abs() < 1e-15);
+        assert!(!SensorModel {
+            range_bias: RangeBias::Kinect2,
+            ..SensorModel::clean()
+        }
+        .is_clean());
     }
 
     #[test]

@@ -119,6 +119,7 @@ fn ascending_ramp_with_landing_roll_and_motion() {
             height_m: 0.8,
             pitch_deg: -30.0,
             roll_deg: 4.0,
+            ..MountPose::default()
         },
         ramp: Some(Ramp {
             slope_deg: 10.0,
@@ -144,6 +145,7 @@ fn descending_slope_and_lower_landing() {
             height_m: 0.8,
             pitch_deg: -45.0,
             roll_deg: -2.0,
+            ..MountPose::default()
         },
         ramp: Some(Ramp {
             direction: SlopeDirection::Descending,
@@ -174,6 +176,7 @@ fn yawed_wall_is_perpendicular() {
             height_m: 0.6,
             pitch_deg: -10.0,
             roll_deg: -3.0,
+            ..MountPose::default()
         },
         ramp: Some(Ramp {
             slope_deg: 90.0,
@@ -197,6 +200,7 @@ fn yawed_ramp_with_side_walls_and_box() {
             height_m: 0.5,
             pitch_deg: -22.0,
             roll_deg: 1.5,
+            ..MountPose::default()
         },
         ramp: Some(Ramp {
             slope_deg: 30.0,
@@ -242,6 +246,7 @@ fn flat_floor_without_ramp_is_exact_and_has_no_truth() {
             height_m: 0.9,
             pitch_deg: -28.0,
             roll_deg: 2.0,
+            ..MountPose::default()
         },
         ..Scene::default()
     };

@@ -212,6 +212,7 @@ fn overhang_spans_only_its_range() {
             height_m: 1.0,
             pitch_deg: 0.0,
             roll_deg: 0.0,
+            ..MountPose::default()
         },
         ceiling: Some(Ceiling {
             height_m: 1.6,

@@ -20,6 +20,7 @@ fn wall_scene(distance_m: f64, yaw_deg: f64) -> Scene {
             height_m: 1.0,
             pitch_deg: 0.0,
             roll_deg: 0.0,
+            ..MountPose::default()
         },
         ramp: Some(Ramp {
             slope_deg: 90.0,
@@ -122,6 +123,7 @@ fn large_errors_only_near_depth_edges() {
             height_m: 0.8,
             pitch_deg: -15.0,
             roll_deg: 0.0,
+            ..MountPose::default()
         },
         ramp: Some(Ramp {
             slope_deg: 90.0,
