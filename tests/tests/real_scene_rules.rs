@@ -1,13 +1,13 @@
 //! The rules of issue #43 ("real scenes") on `slope-synth` scenes, one scene
 //! per rule (`tools/synth/tests/scenes/`, geometry and truth in each file's
 //! header): a floor bent by the largest range bias, pillows on a bed, a
-//! post in the corridor, a walkway between curved walls. Each scene is
+//! post in the corridor, a walkway between curved walls, a ramp larger than
+//! the floor before it without a mount. Each scene is
 //! rendered with the Kinect v2 sensor model (noise, flying pixels,
 //! multipath, pose jitter) and estimated in-process,
 //! [`scene_render::FRAMES`] (4) frames each; every frame's surfaces are
-//! printed, so a failure shows them. (The ramp filling the view without a
-//! mount, `ramp_fills_view_unmounted.toml`, is not here yet: the pipeline
-//! takes the ramp for the ground in 2 of its 4 frames; see its header.)
+//! printed, so a failure shows them. The ramp filling the view without a
+//! mount (`ramp_fills_view_unmounted.toml`) checks the nearest floor.
 //!
 //! And the range bias's coefficients: `slope-synth`'s copy against the
 //! pipeline's noise models, so the two cannot drift.
@@ -206,5 +206,32 @@ fn a_walkway_between_curved_walls_is_the_ground() {
             surfaces(f)
         );
         assert!(road(f).is_none(), "frame {k}");
+    }
+}
+
+/// Rule: without a mount, the ground is the floor the robot stands on (the
+/// nearest floor: the lowest rows of the image), not the largest up-facing
+/// plane. A 10 degree ramp whose foot is 0.75 m ahead fills more of the
+/// image's bottom third than the floor before it; the floor, 1.0 m below
+/// the camera, is the ground in every frame, and the ramp is the road,
+/// uphill, its slope within 1.5 degrees of its 10 (the floor before it is
+/// a short strip whose plane the multipath at the fold tilts).
+#[test]
+fn a_ramp_larger_than_the_floor_before_it_is_not_the_ground() {
+    let e = scene("ramp_fills_view_unmounted");
+    for (k, f) in e.iter().enumerate() {
+        assert!(
+            f.scene.as_ref().is_some_and(|s| s.heights_known),
+            "frame {k}"
+        );
+        assert_ground_at(k, f, 1.0);
+        assert_eq!(f.status, EstimateStatus::Ok, "frame {k}: {f:?}");
+        let r = road(f).unwrap_or_else(|| panic!("frame {k}: no road"));
+        assert_eq!(r.role, SurfaceRole::Ramp, "frame {k}: {r}");
+        assert!(
+            f.slope_deg > 0.0 && (f.slope_deg - 10.0).abs() <= 1.5,
+            "frame {k}: {}",
+            f.slope_deg
+        );
     }
 }

@@ -1,7 +1,7 @@
 //! The ground: the support surface the robot stands on.
 //!
 //! 1. **Level candidates** are flat planes (see [`super::is_flat`], or
-//!    flat at the sensor's noise level: [`is_flat_for_ground`]) whose
+//!    flat at the sensor's noise level: [`super::is_flat_for_ground`]) whose
 //!    normal is within `ground_max_tilt_deg` (mount) or
 //!    `unmounted_ground_max_tilt_deg` (no mount) of the reference up.
 //! 2. **The ground's family**: with a mount, the candidate whose normal is
@@ -31,14 +31,8 @@
 use nalgebra::Vector3;
 
 use super::SelectionConfig;
-use super::{is_flat, PlaneSummary};
+use super::{is_flat_for_ground, PlaneSummary};
 use crate::cloud::angle_between_deg;
-
-/// A level plane whose RMS is at most this many standard deviations of the
-/// sensor's noise is flat enough to be the ground even when it fills its
-/// RANSAC band (a Kinect v1 floor 3 m away, whose noise is as wide as the
-/// band): what the sensor cannot tell from flat is flat.
-pub const GROUND_NOISE_RATIO: f64 = 1.5;
 
 /// The ground as chosen: the lowest plane and every segment of it.
 #[derive(Debug, Clone, PartialEq)]
@@ -89,21 +83,16 @@ fn level_candidates(
         .collect()
 }
 
-/// The ground's flatness: flat within its RANSAC band ([`is_flat`]), or
-/// flat at the sensor's noise level (at most [`GROUND_NOISE_RATIO`]).
-pub fn is_flat_for_ground(plane: &PlaneSummary, config: &SelectionConfig) -> bool {
-    is_flat(plane, config)
-        || (super::is_surface(plane) && plane.quality.noise_ratio <= GROUND_NOISE_RATIO)
-}
-
 /// The nearest floor among the `level` candidates: among those large
 /// enough to be the ground whose inliers reach within
 /// [`NEAREST_ROWS_SHARE`] of the image's height of the lowest row any of
 /// them reaches ([`PlaneSummary::lowest_row`]), the one with the most
-/// pixels in the bottom third of the image (ties: the lowest index). A
-/// narrow patch of floor between a person's legs reaches as low as the
-/// floor around it; a ramp ahead starts higher in the image than the floor
-/// before it, however large it is.
+/// pixels in the image's lowest rows ([`super::BOTTOM_BAND_SHARE`]), then
+/// in its bottom third (ties: the lowest index). A narrow patch of floor
+/// between a person's legs reaches as low as the floor around it; a ramp
+/// ahead starts higher in the image than the floor before it, however
+/// large it is, and where only a strip of floor shows before it, the strip
+/// fills the lowest rows.
 pub fn nearest_floor(
     planes: &[PlaneSummary],
     level: &[usize],
@@ -122,9 +111,10 @@ pub fn nearest_floor(
         .into_iter()
         .filter(|&k| planes[k].lowest_row + NEAREST_ROWS_SHARE >= lowest)
         .max_by(|&a, &b| {
-            planes[a]
-                .bottom_pixels
-                .cmp(&planes[b].bottom_pixels)
+            let (pa, pb) = (&planes[a], &planes[b]);
+            pa.bottom_band_pixels
+                .cmp(&pb.bottom_band_pixels)
+                .then(pa.bottom_pixels.cmp(&pb.bottom_pixels))
                 .then(b.cmp(&a))
         })
 }

@@ -66,6 +66,11 @@ pub use scene::{survey_surfaces, RoadScene, SurveyInput};
 pub(crate) use segment::{chosen_segments, PlaneSegment};
 pub use surfaces::{describe_surfaces, plane_axes, Surface, CORRIDOR_MIN_PIXELS, CORRIDOR_SAMPLES};
 
+/// The lowest rows of the image, as a share of its height, in which the
+/// nearest floor is told from a surface beyond it
+/// ([`PlaneSummary::bottom_band_pixels`]).
+pub const BOTTOM_BAND_SHARE: f64 = 0.05;
+
 /// What selection needs to know about a segmented plane.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PlaneSummary {
@@ -75,6 +80,9 @@ pub struct PlaneSummary {
     pub inliers: usize,
     /// Inlier pixels in the bottom third of the image's rows.
     pub bottom_pixels: usize,
+    /// Inlier pixels in the lowest [`BOTTOM_BAND_SHARE`] of the image's
+    /// rows (the floor right before the robot).
+    pub bottom_band_pixels: usize,
     /// How far down the image its lowest inliers reach, as a share of the
     /// image's rows (0 top, 1 bottom): the row of the inlier a hundredth of
     /// them from the last (stray pixels do not count); 0 for a plane
@@ -110,14 +118,17 @@ impl PlaneSummary {
         noise: NoiseModel,
     ) -> Self {
         let bottom_start = (cloud.height - cloud.height / 3) * cloud.width;
+        let band_rows = (cloud.height as f64 * BOTTOM_BAND_SHARE).ceil() as usize;
+        let band_start = cloud.height.saturating_sub(band_rows) * cloud.width;
+        let below = |start: usize| {
+            plane.inliers.len() - plane.inliers.partition_point(|&i| (i as usize) < start)
+        };
         Self {
             plane: plane.plane,
             inliers: plane.inliers.len(),
-            // Inliers are in pixel order: those of the bottom third are a tail.
-            bottom_pixels: plane.inliers.len()
-                - plane
-                    .inliers
-                    .partition_point(|&i| (i as usize) < bottom_start),
+            // Inliers are in pixel order: those of the bottom rows are a tail.
+            bottom_pixels: below(bottom_start),
+            bottom_band_pixels: below(band_start),
             lowest_row: lowest_row(&plane.inliers, cloud.width, cloud.height),
             centroid: plane.centroid,
             quality: plane_quality(cloud, &plane.plane, &plane.inliers, threshold, noise),
@@ -145,11 +156,26 @@ pub fn is_surface(plane: &PlaneSummary) -> bool {
     plane.quality.veil_fraction <= MAX_VEIL_FRACTION
 }
 
+/// A level plane whose RMS is at most this many standard deviations of the
+/// sensor's noise is flat enough to be the ground even when it fills its
+/// RANSAC band (a Kinect v1 floor 3 m away, whose noise is as wide as the
+/// band): what the sensor cannot tell from flat is flat. Only the ground:
+/// a person's legs 3 m before a Kinect v1 are as flat at its noise level,
+/// and must not become the road.
+pub const GROUND_NOISE_RATIO: f64 = 1.5;
+
 /// True when the plane is a surface flat within its RANSAC band: it does
 /// not fill the band evenly (the test every plane passes, ground segments
 /// included).
 pub fn is_flat(plane: &PlaneSummary, config: &SelectionConfig) -> bool {
     is_surface(plane) && plane.quality.relative_rms <= config.max_relative_rms
+}
+
+/// The ground's flatness: flat within its RANSAC band ([`is_flat`]), or a
+/// surface flat at the sensor's noise level (at most
+/// [`GROUND_NOISE_RATIO`]).
+pub fn is_flat_for_ground(plane: &PlaneSummary, config: &SelectionConfig) -> bool {
+    is_flat(plane, config) || (is_surface(plane) && plane.quality.noise_ratio <= GROUND_NOISE_RATIO)
 }
 
 /// True when the plane is flat at the sensor's noise level as well (the
@@ -194,7 +220,7 @@ pub fn mount_disagrees(
     };
     let level: Vec<usize> = (0..planes.len())
         .filter(|&k| {
-            ground::is_flat_for_ground(&planes[k], config)
+            is_flat_for_ground(&planes[k], config)
                 && crate::cloud::angle_between_deg(&planes[k].plane.normal, &mount_up)
                     <= config.unmounted_ground_max_tilt_deg
         })
