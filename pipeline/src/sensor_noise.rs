@@ -169,6 +169,30 @@ mod tests {
         }
     }
 
+    /// The range bias's bounds at hand-computed points, growing with depth.
+    #[test]
+    fn the_range_bias_grows_with_depth_as_stated() {
+        let close = |a: f64, b: f64| (a - b).abs() < 1e-12;
+        assert!(close(NoiseModel::Kinect2.floor_bend_deg(1.0), 1.3));
+        assert!(close(NoiseModel::Kinect2.floor_bend_deg(4.0), 2.2));
+        assert!(close(NoiseModel::Kinect1.floor_bend_deg(2.0), 4.0));
+        assert!(close(NoiseModel::Kinect1.floor_bend_deg(5.0), 5.0));
+        assert!(close(NoiseModel::Kinect2.floor_height_bias_m(4.0), 0.02));
+        assert!(close(NoiseModel::Kinect1.floor_height_bias_m(4.0), 0.04));
+        // The band: the height bias and two deviations at 75 degrees.
+        let sigma = NoiseModel::Kinect1.sigma_m(3.0, 75f64.to_radians());
+        assert!(close(
+            NoiseModel::Kinect1.floor_band_m(3.0),
+            0.03 + 2.0 * sigma
+        ));
+        for model in [NoiseModel::Kinect2, NoiseModel::Kinect1] {
+            for z in [0.5, 1.0, 2.0, 4.0, 6.0] {
+                assert!(model.floor_bend_deg(z + 1.0) >= model.floor_bend_deg(z));
+                assert!(model.floor_band_m(z + 1.0) > model.floor_band_m(z));
+            }
+        }
+    }
+
     #[test]
     fn a_recordings_sensor_name_picks_the_model() {
         assert_eq!(NoiseModel::for_sensor("kinect1"), NoiseModel::Kinect1);

@@ -226,6 +226,7 @@ mod tests {
     use super::*;
     use crate::fixtures::{Scene, SceneCloud};
     use crate::ransac_planes::RansacConfig;
+    use slope_ipc_types::{CloudPoint, Intrinsics};
 
     /// A fronto-parallel wall 2 m ahead filling the image: its area is the
     /// image's footprint at 2 m, `(W z / fx) (H z / fy)`.
@@ -262,6 +263,65 @@ mod tests {
             "{}",
             q.border_fraction
         );
+    }
+
+    /// Veil points against their definition, on a row of readings: a wall
+    /// 2 m away, three mixed readings stepping to a wall 3 m away, and that
+    /// wall. The mixed readings jump to both neighbours (veil); the walls'
+    /// edge pixels jump to one side only, and a steep but real surface (a
+    /// floor seen 8 m ahead of a camera 1.3 m up: 0.14 m a row at 525 px)
+    /// is no veil either; a neighbour without a reading is no jump.
+    #[test]
+    fn veil_points_jump_to_both_neighbours_steeper_than_88_degrees() {
+        let depths = [2.0, 2.0, 2.0, 2.25, 2.5, 2.75, 3.0, 3.0, 3.0];
+        let w = depths.len();
+        let row = |depths: &[f64]| -> Vec<CloudPoint> {
+            depths
+                .iter()
+                .map(|&z| CloudPoint {
+                    x_m: 0.0,
+                    y_m: 0.0,
+                    z_m: if z > 0.0 { z as f32 } else { f32::NAN },
+                    rgb: 0,
+                })
+                .collect()
+        };
+        let intrinsics = Intrinsics {
+            fx: 525.0,
+            fy: 525.0,
+            cx: 4.0,
+            cy: 0.0,
+        };
+        let points = row(&depths);
+        let view = CloudView {
+            points: &points,
+            width: w,
+            height: 1,
+            intrinsics,
+            mount: Default::default(),
+        };
+        let veil: Vec<bool> = (0..w).map(|k| is_veil_point(&view, k, depths[k])).collect();
+        assert_eq!(
+            veil,
+            [false, false, false, true, true, true, false, false, false]
+        );
+        // 0.14 m a pixel at 8 m: steeper than a wall, shallower than 88 deg.
+        let floor: Vec<f64> = (0..w).map(|k| 8.0 + 0.14 * k as f64).collect();
+        let points = row(&floor);
+        let view = CloudView {
+            points: &points,
+            ..view
+        };
+        assert!((0..w).all(|k| !is_veil_point(&view, k, floor[k])));
+        // A hole beside a mixed reading: one jump only.
+        let holed = [2.0, 2.0, 2.0, 0.0, 2.5, 2.75, 3.0, 3.0, 3.0];
+        let points = row(&holed);
+        let view = CloudView {
+            points: &points,
+            ..view
+        };
+        assert!(!is_veil_point(&view, 4, 2.5));
+        assert!(is_veil_point(&view, 5, 2.75));
     }
 
     /// A view of width 0 (malformed: its points have no pixel grid) has no
