@@ -322,6 +322,51 @@ pub fn stop_on_signals() -> anyhow::Result<StopFlag> {
     Ok(stop)
 }
 
+/// Sets up the programs' logging: to stderr at `level` (`RUST_LOG`
+/// overrides it), in colour only on a terminal.
+pub fn init_logging(level: &str) {
+    use std::io::IsTerminal;
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env()
+                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(level)),
+        )
+        .with_writer(std::io::stderr)
+        .with_ansi(std::io::stderr().is_terminal())
+        .init();
+}
+
+/// The exit status of a program whose `run` ended with `result`: on
+/// success a recording `(dir, frames written, frames asked)`, logged as
+/// done, or as a valid recording of the frames written before a stop; an
+/// error is printed once, a line per cause, no backtrace (as the other
+/// programs).
+pub fn exit_code(result: anyhow::Result<(PathBuf, u64, u64)>) -> std::process::ExitCode {
+    use std::process::ExitCode;
+    match result {
+        Ok((dir, frames, asked)) if frames < asked => {
+            tracing::info!(
+                dir = %dir.display(),
+                frames,
+                asked,
+                "interrupted: a valid recording of the frames written so far"
+            );
+            ExitCode::SUCCESS
+        }
+        Ok((dir, frames, _)) => {
+            tracing::info!(dir = %dir.display(), frames, "done");
+            ExitCode::SUCCESS
+        }
+        Err(err) => {
+            eprintln!("error: {err}");
+            for cause in err.chain().skip(1) {
+                eprintln!("  caused by: {cause}");
+            }
+            ExitCode::FAILURE
+        }
+    }
+}
+
 /// Renders and writes the recording the arguments describe. When `stop` is
 /// set, it stops after the frame being rendered and leaves a valid
 /// recording of the frames written so far

@@ -1,49 +1,20 @@
 //! `slope-bend`: parse the command line, set up logging, call
 //! [`slope_synth::bend::cli::run`].
 
-use std::io::IsTerminal;
 use std::process::ExitCode;
 
 use clap::Parser;
-use tracing_subscriber::EnvFilter;
+use slope_synth::cli::{exit_code, init_logging, stop_on_signals};
 
 fn main() -> ExitCode {
     let args = slope_synth::bend::cli::BendArgs::parse();
-    tracing_subscriber::fmt()
-        .with_env_filter(
-            EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new(args.log_level())),
-        )
-        .with_writer(std::io::stderr)
-        .with_ansi(std::io::stderr().is_terminal())
-        .init();
-    match slope_synth::cli::stop_on_signals()
-        .and_then(|stop| slope_synth::bend::cli::run(&args, &stop))
-    {
-        Ok(summary) if summary.is_partial() => {
-            tracing::info!(
-                dir = %summary.dir.display(),
-                frames = summary.frames,
-                asked = summary.frames_asked,
-                "interrupted: a valid recording of the frames written so far"
-            );
-            ExitCode::SUCCESS
-        }
-        Ok(summary) => {
-            tracing::info!(
-                dir = %summary.dir.display(),
-                frames = summary.frames,
-                truth_deg = args.angle_deg,
-                "done"
-            );
-            ExitCode::SUCCESS
-        }
-        Err(err) => {
-            // Once, a line per cause, no backtrace (as the other programs).
-            eprintln!("error: {err}");
-            for cause in err.chain().skip(1) {
-                eprintln!("  caused by: {cause}");
-            }
-            ExitCode::FAILURE
-        }
-    }
+    init_logging(args.log_level());
+    exit_code(
+        stop_on_signals()
+            .and_then(|stop| slope_synth::bend::cli::run(&args, &stop))
+            .map(|s| {
+                tracing::info!(truth_deg = args.angle_deg, "the bent part's angle");
+                (s.dir, s.frames as u64, s.frames_asked as u64)
+            }),
+    )
 }
