@@ -51,8 +51,9 @@ pub struct Road {
 }
 
 /// The other pieces of the road's surface among `surfaces` (indices): the
-/// candidates ([`road_candidates`]) at most [`SAME_SURFACE_M`] from it (by
-/// their mean distance in the corridor) with its slope (within
+/// road's candidates (the module documentation) at most
+/// [`SAME_SURFACE_M`] from it (by their mean distance in the corridor)
+/// with its slope (within
 /// `selection.parallel_tolerance_deg`) whose centroids lie within
 /// [`PIECE_GAP_M`] of its plane: one wall RANSAC cut in two, measured
 /// together (`estimator.rs`), so that the slope does not depend on where
