@@ -75,11 +75,11 @@ mod tests {
             assert_eq!(acc & bit, 0);
             acc | bit
         });
-        assert_eq!(all, 0b1111_1111);
+        assert_eq!(all, 0b11_1111_1111);
         let names: Vec<_> = names(FEW_POINTS | GROUND_FROM_MOUNT).collect();
         assert_eq!(names, ["few_points", "ground_from_mount"]);
         assert_eq!(super::names(0).count(), 0);
-        let names: Vec<_> = super::names(ROUGH_PLANE | 1 << 9 | 1 << 31).collect();
-        assert_eq!(names, ["rough_plane", "bit_9", "bit_31"]);
+        let names: Vec<_> = super::names(ROUGH_PLANE | 1 << 10 | 1 << 31).collect();
+        assert_eq!(names, ["rough_plane", "bit_10", "bit_31"]);
     }
 }
