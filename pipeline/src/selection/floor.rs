@@ -43,10 +43,15 @@ pub fn floor_pieces(surfaces: &[Surface], noise: NoiseModel, road: &RoadConfig) 
 /// twice the floor bend at the middle of its extent and its far end is
 /// ahead of the robot.
 pub fn is_floor_piece(s: &Surface, noise: NoiseModel, road: &RoadConfig) -> bool {
-    let bend = noise.floor_bend_deg(0.5 * (s.distance_m + s.far_m));
+    let bend = bend_at(s, noise);
     if !(s.far_m > 0.0) || !(s.tilt_deg() <= 2.0 * bend) {
         return false;
     }
     let band = road.join_tolerance_m + noise.floor_band_m(s.far_m);
     s.lowest_m >= -band && s.highest_m <= band
+}
+
+/// `noise`'s floor bend at the middle of `s`'s forward extent, degrees.
+pub fn bend_at(s: &Surface, noise: NoiseModel) -> f64 {
+    noise.floor_bend_deg(0.5 * (s.distance_m + s.far_m))
 }

@@ -156,8 +156,7 @@ impl Kind {
 /// The sensor's floor bend (`sensor_noise.rs`) at the middle of `s`'s
 /// forward extent, degrees: a ramp is tilted beyond it.
 pub fn floor_bend_at(s: &Surface, selection: &SelectionConfig) -> f64 {
-    let noise = selection.noise_model.unwrap_or_default();
-    noise.floor_bend_deg(0.5 * (s.distance_m + s.far_m))
+    super::floor::bend_at(s, selection.noise_model.unwrap_or_default())
 }
 
 /// A surface something else can stand on: its height band and footprint.
